@@ -1,0 +1,56 @@
+// `timeopt curve WAYPOINTS.csv [--kind cubic|minjerk] -o CURVE.json`
+
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/io/curve_io.h"
+
+namespace timeopt::cli {
+namespace {
+
+struct CurveArgs {
+  std::string waypoints;
+  std::string kind = "minjerk";
+  std::string output;
+};
+
+int RunCurve(const CurveArgs& args) {
+  const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
+  const PiecewiseCurve curve =
+      args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
+  WriteCurveJson(curve, args.output);
+
+  const ContinuityReport report = curve.Continuity(4);
+  std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints\n"
+            << "pieces: " << curve.num_pieces() << "\n"
+            << std::setprecision(9) << "length: " << curve.ArcLength(1e-9) << " m\n"
+            << "continuity (largest jump at the joints):\n";
+  for (size_t d = 0; d < report.jump.size(); ++d) {
+    std::cout << "  derivative " << d << ": " << std::setprecision(3) << std::scientific
+              << report.jump[d] << std::defaultfloat << "\n";
+  }
+  std::cout << "written: " << args.output << "\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterCurveCommand(CLI::App& app, Runner& run) {
+  auto args = std::make_shared<CurveArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "curve", "Fit a curve through waypoints (x,y,z CSV rows) with unit piece durations in s");
+  sub->add_option("WAYPOINTS", args->waypoints, "Waypoint CSV file, one x,y,z row per waypoint")
+      ->required();
+  sub->add_option("--kind", args->kind,
+                  "cubic: C2 natural cubic; minjerk: minimum-jerk quintic, rest to rest")
+      ->check(CLI::IsMember({"cubic", "minjerk"}))
+      ->capture_default_str();
+  sub->add_option("-o,--output", args->output, "Output curve JSON file")->required();
+  sub->callback([args, &run] { run = [args] { return RunCurve(*args); }; });
+}
+
+}  // namespace timeopt::cli

@@ -1,0 +1,100 @@
+// Runs the real `timeopt` executable and checks exit codes, messages and outputs.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "timeopt/io/curve_io.h"
+
+namespace timeopt {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct CliRun {
+  int exit_code;
+  std::string output;  // stdout and stderr together
+};
+
+CliRun RunCli(const std::string& args) {
+  const std::string command = std::string(TIMEOPT_CLI_PATH) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  std::string output;
+  std::array<char, 4096> buffer{};
+  size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("timeopt_cli_test_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  void Write(const std::string& name, const std::string& text) const {
+    std::ofstream(Path(name)) << text;
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(CliTest, HelpAndVersion) {
+  const CliRun help = RunCli("curve --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_THAT(help.output, HasSubstr("--kind"));
+  const CliRun version = RunCli("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_THAT(version.output, HasSubstr("timeopt 0."));
+}
+
+TEST_F(CliTest, CurveFitsAndWritesJson) {
+  Write("w.csv", "x,y,z\n0,0,0\n1,0,0\n1,1,0\n2,1,1\n");
+  for (const std::string kind : {"cubic", "minjerk"}) {
+    const CliRun r = RunCli("curve " + Path("w.csv") + " --kind " + kind + " -o " + Path("c.json"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("pieces: 3"));
+    EXPECT_THAT(r.output, HasSubstr("length: "));
+    EXPECT_THAT(r.output, HasSubstr("derivative 2: "));
+    const CurveFile f = ReadCurveJson(Path("c.json"));
+    ASSERT_EQ(f.curve.num_pieces(), 3);
+    // The written curve passes through the last waypoint (JSON keeps full precision).
+    EXPECT_LT((f.curve.Evaluate(2, 1.0) - Eigen::Vector3d(2, 1, 1)).norm(), 1e-12);
+  }
+}
+
+TEST_F(CliTest, BadInputExitsWithTwoAndOneLine) {
+  Write("bad.csv", "0,0,0\n1,x,0\n");
+  CliRun r = RunCli("curve " + Path("bad.csv") + " -o " + Path("c.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("line 2"));
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+
+  r = RunCli("curve " + Path("missing.csv") + " -o " + Path("c.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("missing.csv"));
+
+  r = RunCli("curve " + Path("bad.csv") + " --kind septic -o " + Path("c.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--kind"));
+
+  r = RunCli("");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+}  // namespace
+}  // namespace timeopt

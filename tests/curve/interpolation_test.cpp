@@ -1,0 +1,144 @@
+#include "timeopt/curve/interpolation.h"
+
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+namespace timeopt {
+namespace {
+
+Waypoints RandomWaypoints(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  Waypoints w(3, count);
+  for (int i = 0; i < count; ++i) w.col(i) = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  return w;
+}
+
+// Values of size ~10 after a banded solve: 1e-10 is ~1e5 ulps, far above rounding and far below
+// any real error.
+constexpr double kTol = 1e-10;
+
+TEST(NaturalCubicSpline, InterpolatesIsC2AndNatural) {
+  std::mt19937 rng(1);
+  for (int count : {2, 3, 7, 40}) {
+    const Waypoints w = RandomWaypoints(rng, count);
+    const PiecewiseCurve c = NaturalCubicSpline(w);
+    ASSERT_EQ(c.num_pieces(), count - 1);
+    for (int i = 0; i < count - 1; ++i) {
+      EXPECT_LT((c.Evaluate(i, 0.0) - w.col(i)).norm(), kTol);
+      EXPECT_LT((c.Evaluate(i, 1.0) - w.col(i + 1)).norm(), kTol);
+    }
+    const ContinuityReport r = c.Continuity(2);
+    EXPECT_LT(r.jump[1], kTol);
+    EXPECT_LT(r.jump[2], kTol);
+    EXPECT_LT(c.Evaluate(0, 0.0, 2).norm(), kTol);
+    EXPECT_LT(c.Evaluate(c.num_pieces() - 1, 1.0, 2).norm(), kTol);
+  }
+}
+
+TEST(MinimumJerkSpline, InterpolatesAndHonorsEnds) {
+  std::mt19937 rng(2);
+  const Waypoints w = RandomWaypoints(rng, 9);
+  EndDerivatives ends;
+  ends.start_velocity = Eigen::Vector3d(1, -2, 0.5);
+  ends.start_acceleration = Eigen::Vector3d(0, 0.3, 0);
+  ends.end_velocity = Eigen::Vector3d(0, 0, -1);
+  ends.end_acceleration = Eigen::Vector3d(2, 0, 0);
+  const PiecewiseCurve c = MinimumJerkSpline(w, ends);
+  for (int i = 0; i < 8; ++i) {
+    EXPECT_LT((c.Evaluate(i, 0.0) - w.col(i)).norm(), kTol);
+    EXPECT_LT((c.Evaluate(i, 1.0) - w.col(i + 1)).norm(), kTol);
+  }
+  EXPECT_LT((c.Evaluate(0, 0.0, 1) - *ends.start_velocity).norm(), kTol);
+  EXPECT_LT((c.Evaluate(0, 0.0, 2) - *ends.start_acceleration).norm(), kTol);
+  EXPECT_LT((c.Evaluate(7, 1.0, 1) - *ends.end_velocity).norm(), kTol);
+  EXPECT_LT((c.Evaluate(7, 1.0, 2) - *ends.end_acceleration).norm(), kTol);
+  // Optimality makes the curve C4 at interior waypoints (jerk and snap continuous).
+  const ContinuityReport r = c.Continuity(4);
+  for (int d = 0; d <= 4; ++d) EXPECT_LT(r.jump[d], 1e-8) << "order " << d;
+}
+
+// Perturbation that keeps a curve admissible (through the waypoints, C2, same end derivatives):
+// move the velocity/acceleration at interior knots by re-fitting Hermite pieces, and add a bump
+// s^3 (1-s)^3 q(s) inside each piece, which vanishes with its first two derivatives at both ends.
+PiecewiseCurve Perturb(const PiecewiseCurve& c, std::mt19937& rng, double size) {
+  std::normal_distribution<double> n(0.0, size);
+  const int m = c.num_pieces();
+  std::vector<Eigen::Vector3d> dv(m + 1, Eigen::Vector3d::Zero()), da(m + 1, Eigen::Vector3d::Zero());
+  for (int i = 1; i < m; ++i) {
+    dv[i] = Eigen::Vector3d(n(rng), n(rng), n(rng));
+    da[i] = Eigen::Vector3d(n(rng), n(rng), n(rng));
+  }
+  std::vector<PolynomialPiece> pieces;
+  for (int i = 0; i < m; ++i) {
+    // Quintic Hermite correction with zero position change at both ends.
+    Eigen::Matrix<double, 6, 6> h;
+    h << 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0.5, 0, 0, 0, -10, -6, -1.5, 10, -4, 0.5, 15, 8,
+        1.5, -15, 7, -1, -6, -3, -0.5, 6, -3, 0.5;
+    Eigen::Matrix<double, 6, 3> ends = Eigen::Matrix<double, 6, 3>::Zero();
+    ends.row(1) = dv[i].transpose();
+    ends.row(2) = da[i].transpose();
+    ends.row(4) = dv[i + 1].transpose();
+    ends.row(5) = da[i + 1].transpose();
+    PolynomialPiece::Coefficients coeff = c.piece(i).WithDegree(7).coefficients();
+    coeff.leftCols(6) += (h * ends).transpose();
+    // bump: s^3 (1 - s)^3 (b0 + b1 s) = s^3 - 3 s^4 + 3 s^5 - s^6 times (b0 + b1 s)
+    const Eigen::Vector3d b0(n(rng), n(rng), n(rng)), b1(n(rng), n(rng), n(rng));
+    const double base[4] = {1, -3, 3, -1};
+    for (int k = 0; k < 4; ++k) {
+      coeff.col(3 + k) += base[k] * b0;
+      coeff.col(4 + k) += base[k] * b1;
+    }
+    pieces.emplace_back(coeff);
+  }
+  return PiecewiseCurve(pieces);
+}
+
+TEST(MinimumJerkSpline, RandomAdmissiblePerturbationsNeverLowerTheJerkIntegral) {
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Waypoints w = RandomWaypoints(rng, 6);
+    for (const EndDerivatives& ends : {EndDerivatives::RestToRest(), EndDerivatives{}}) {
+      const PiecewiseCurve best = MinimumJerkSpline(w, ends);
+      const double j0 = best.SquaredDerivativeIntegral(3);
+      for (int k = 0; k < 50; ++k) {
+        for (double size : {1e-3, 1e-1, 1.0}) {
+          // Free ends: perturbing the end derivatives too would be admissible; the interior ones
+          // suffice to probe the stationarity conditions, and the bump probes everything else.
+          const PiecewiseCurve other = Perturb(best, rng, size);
+          // Relative 1e-12 covers rounding in the exact integrals of values up to ~1e4.
+          EXPECT_GE(other.SquaredDerivativeIntegral(3), j0 * (1.0 - 1e-12));
+        }
+      }
+    }
+  }
+}
+
+TEST(MinimumJerkSpline, FreeEndsSatisfyNaturalConditions) {
+  std::mt19937 rng(6);
+  const Waypoints w = RandomWaypoints(rng, 5);
+  const PiecewiseCurve c = MinimumJerkSpline(w, EndDerivatives{});
+  // Free velocity: snap vanishes at the end; free acceleration: jerk vanishes (variational
+  // boundary terms). Values of jerk are ~1e3 here, so 1e-8 absolute is tight.
+  EXPECT_LT(c.Evaluate(0, 0.0, 3).norm(), 1e-8);
+  EXPECT_LT(c.Evaluate(0, 0.0, 4).norm(), 1e-8);
+  EXPECT_LT(c.Evaluate(3, 1.0, 3).norm(), 1e-8);
+  EXPECT_LT(c.Evaluate(3, 1.0, 4).norm(), 1e-8);
+}
+
+TEST(Interpolation, RejectsBadInput) {
+  EXPECT_THROW(NaturalCubicSpline(Waypoints(3, 1)), std::invalid_argument);
+  Waypoints w = Waypoints::Zero(3, 3);
+  w(2, 1) = std::numeric_limits<double>::infinity();
+  try {
+    MinimumJerkSpline(w);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("waypoint 1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(MinimumJerkSpline(Waypoints::Random(3, 2), EndDerivatives{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace timeopt
