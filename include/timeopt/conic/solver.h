@@ -1,0 +1,170 @@
+#pragma once
+// Primal-dual interior-point solver for linear, second-order and rotated second-order cone programs
+// (problem form in problem.h).
+//
+// Method (after the designs documented for ECOS, Domahidi, Chu and Boyd, ECC 2013, and Clarabel,
+// Goulart and Chen, 2024): the homogeneous self-dual embedding in (x, y, z, s, tau, kappa), so that
+// infeasible and unbounded problems end with certificates; Nesterov-Todd scaling for the orthant and
+// second-order cones; Mehrotra predictor-corrector with the second-order correction; one sparse
+// quasi-definite KKT system per iteration
+//     [ delta I   A'        G'            ] [dx]
+//     [ A        -delta I   0             ] [dy]
+//     [ G         0        -W'W - delta I ] [dz]
+// factorized by a signed LDL' with a fill-reducing (AMD) ordering and a symbolic analysis computed
+// once per sparsity pattern, static and dynamic regularization and iterative refinement on the
+// unregularized system. Large second-order cones enter the KKT system by the sparse expansion of
+// their scaling W'W = eta^2 (D + u u' - v v') (two extra rows per cone), so no dense block appears.
+// Rotated cones are mapped to standard ones by the orthogonal transform of their first two rows.
+//
+// A Solver is a reusable workspace: a second Solve() on a problem with the same sparsity pattern
+// (same A and G patterns, same cones) reuses the ordering, the symbolic factorization and all memory.
+
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "timeopt/conic/problem.h"
+
+namespace timeopt::conic {
+
+/// Termination status of Solver::Solve.
+enum class Status {
+  /// The tolerances of Options were met: x, y, z, s are an approximately optimal primal-dual pair.
+  /// x is usable.
+  kOptimal,
+  /// The problem has no feasible x. y and z hold a certificate normalized so that b'y + h'z = -1,
+  /// with A'y + G'z = 0 (to infeasibility_tolerance) and z in K. x and s are zero and not usable.
+  kPrimalInfeasible,
+  /// The problem is unbounded below (its dual is infeasible). x and s hold a certificate normalized so
+  /// that c'x = -1, with A x = 0 and G x + s = 0 (to infeasibility_tolerance) and s in K: an improving
+  /// ray. y and z are zero. x is a direction, not a solution.
+  kDualInfeasible,
+  /// max_iterations (or the time limit) was reached first. x, y, z, s are the last iterate scaled by
+  /// 1/tau; they satisfy the cone constraints but not necessarily the tolerances (see the residuals).
+  kIterationLimit,
+  /// The iteration could not make progress (tiny steps, failed factorization or non-finite values).
+  /// x, y, z, s are the last finite iterate scaled by 1/tau; use them only after checking residuals.
+  kNumericalError,
+  /// Solve() has not run. Nothing is usable.
+  kNotSolved,
+};
+
+/// Short lowercase name of a status, e.g. "optimal", "primal_infeasible".
+const char* ToString(Status status);
+
+/// Progress of one interior-point iteration, given to Options::callback.
+struct IterationInfo {
+  int iteration = 0;               ///< 0 for the initial point, then 1, 2, ...
+  double primal_objective = 0.0;   ///< c'x / tau.
+  double dual_objective = 0.0;     ///< -(b'y + h'z) / tau.
+  double gap = 0.0;                ///< s'z / tau^2 (absolute complementarity gap).
+  double primal_residual = 0.0;    ///< Relative primal residual (see Result).
+  double dual_residual = 0.0;      ///< Relative dual residual (see Result).
+  double tau = 0.0;                ///< Homogeneous variable tau (tends to 0 for infeasible problems).
+  double kappa = 0.0;              ///< Homogeneous variable kappa (tends to 0 for solvable problems).
+  double mu = 0.0;                 ///< Complementarity measure (s'z + tau kappa) / (degree + 1).
+  double step = 0.0;               ///< Step length taken in this iteration (0 for the initial point).
+  double sigma = 0.0;              ///< Centering parameter of this iteration.
+  int refinement_steps = 0;        ///< Iterative refinement steps used in this iteration.
+};
+
+/// Outcome of Solver::Solve. For the meaning of x, y, z, s under each status see Status.
+struct Result {
+  Status status = Status::kNotSolved;
+  std::string message;             ///< Human readable reason for the status.
+  Eigen::VectorXd x;               ///< Primal variables, size n.
+  Eigen::VectorXd y;               ///< Duals of A x = b, size p (sign: c + A'y + G'z = 0).
+  Eigen::VectorXd z;               ///< Duals of G x + s = h, size m, in K.
+  Eigen::VectorXd s;               ///< Slacks h - G x, size m, in K.
+  double primal_objective = 0.0;   ///< c'x.
+  double dual_objective = 0.0;     ///< -b'y - h'z.
+  double gap = 0.0;                ///< Absolute complementarity gap s'z.
+  /// max(||Ax-b||_inf, ||Gx+s-h||_inf) / max(1, ||b||_inf, ||h||_inf, ||Ax||_inf, ||Gx||_inf, ||s||_inf).
+  double primal_residual = 0.0;
+  /// ||c + A'y + G'z||_inf / max(1, ||c||_inf, ||A'y||_inf, ||G'z||_inf).
+  double dual_residual = 0.0;
+  int iterations = 0;              ///< Interior-point iterations performed.
+  double solve_time_seconds = 0.0; ///< Wall time of Solve(), including analysis.
+  int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
+  int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
+  bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
+
+  /// True iff status == kOptimal.
+  bool is_success() const { return status == Status::kOptimal; }
+  /// One line: status, objective, residuals, iterations, time.
+  std::string BriefReport() const;
+};
+
+/// Settings of Solver (also reachable as Solver::Options).
+struct SolverOptions {
+  /// Relative primal and dual residual tolerance for kOptimal (dimensionless, see Result). 1e-8.
+  double feasibility_tolerance = 1e-8;
+  /// Absolute tolerance on the gap s'z for kOptimal (objective units). 1e-8.
+  double absolute_gap_tolerance = 1e-8;
+  /// Relative tolerance on the gap, s'z / min(|primal objective|, |dual objective|), for kOptimal.
+  /// Either gap tolerance suffices. 1e-8.
+  double relative_gap_tolerance = 1e-8;
+  /// Tolerance of the infeasibility certificates: residual of the normalized ray. 1e-8.
+  double infeasibility_tolerance = 1e-8;
+  /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
+  int max_iterations = 100;
+  /// Wall-time limit of one Solve(), seconds. Infinite by default.
+  double max_solve_time_in_seconds = std::numeric_limits<double>::infinity();
+  /// Fraction of the step to the cone boundary that is taken, in (0, 1). 0.99 keeps iterates
+  /// strictly interior without slowing convergence.
+  double step_fraction = 0.99;
+  /// Smallest step length (in (0, 1)) below which the iteration is declared stuck. 1e-10.
+  double min_step = 1e-10;
+  /// Static regularization delta added with the sign of each KKT diagonal block (dimensionless).
+  /// 1e-8 makes the KKT matrix quasi-definite even with redundant equalities; iterative refinement
+  /// removes its effect on the solution.
+  double static_regularization = 1e-8;
+  /// A pivot whose signed value falls below this threshold is replaced (dynamic regularization).
+  double dynamic_regularization_threshold = 1e-13;
+  /// The value (with the pivot's expected sign) that replaces such a pivot. 1e-7.
+  double dynamic_regularization = 1e-7;
+  /// Maximum iterative refinement steps per KKT solve, on the unregularized system. 6.
+  int max_refinement_steps = 6;
+  /// Refinement stops once ||residual||_inf <= this * (1 + ||rhs||_inf). 1e-13.
+  double refinement_tolerance = 1e-13;
+  /// Second-order cones of at least this dimension use the sparse expansion of their scaling
+  /// (two extra KKT rows per cone) instead of a dense block. >= 1. 6: below that a dense block
+  /// has fewer non-zeros than the expansion.
+  int sparse_cone_min_dimension = 6;
+  /// Called after every iteration (and once for the initial point) if set. The library never prints.
+  std::function<void(const IterationInfo&)> callback;
+
+  /// True if every field is in its range; otherwise false with a message in *error (may be null).
+  bool IsValid(std::string* error) const;
+};
+
+class Solver {
+ public:
+  using Options = SolverOptions;
+
+  explicit Solver(Options options = {});
+  ~Solver();
+  Solver(Solver&&) noexcept;
+  Solver& operator=(Solver&&) noexcept;
+  Solver(const Solver&) = delete;
+  Solver& operator=(const Solver&) = delete;
+
+  const Options& options() const { return options_; }
+  /// Replaces the options (throws std::invalid_argument if !options.IsValid()). A change of
+  /// sparse_cone_min_dimension forces a new symbolic analysis at the next Solve().
+  void set_options(const Options& options);
+
+  /// Solves the problem. Throws std::invalid_argument (before any iteration) if the problem is malformed
+  /// (see Problem::Validate) or the options are invalid. All other outcomes are reported in the Result.
+  Result Solve(const Problem& problem);
+
+ private:
+  struct Workspace;
+  Options options_;
+  std::unique_ptr<Workspace> workspace_;
+};
+
+}  // namespace timeopt::conic

@@ -1,0 +1,1064 @@
+#include "timeopt/conic/solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+
+#include "timeopt/conic/sparse_ldl.h"
+
+namespace timeopt::conic {
+
+const char* ToString(Status status) {
+  switch (status) {
+    case Status::kOptimal: return "optimal";
+    case Status::kPrimalInfeasible: return "primal_infeasible";
+    case Status::kDualInfeasible: return "dual_infeasible";
+    case Status::kIterationLimit: return "iteration_limit";
+    case Status::kNumericalError: return "numerical_error";
+    case Status::kNotSolved: return "not_solved";
+  }
+  return "unknown";
+}
+
+std::string Result::BriefReport() const {
+  char buffer[320];
+  std::snprintf(buffer, sizeof(buffer),
+                "%s: primal %.10g dual %.10g gap %.2e pres %.2e dres %.2e, %d iterations, %.3f ms",
+                ToString(status), primal_objective, dual_objective, gap, primal_residual,
+                dual_residual, iterations, 1e3 * solve_time_seconds);
+  std::string report(buffer);
+  if (!message.empty()) report += " (" + message + ")";
+  return report;
+}
+
+bool SolverOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  if (!positive(feasibility_tolerance)) return fail("feasibility_tolerance must be positive and finite");
+  if (!positive(absolute_gap_tolerance)) return fail("absolute_gap_tolerance must be positive and finite");
+  if (!positive(relative_gap_tolerance)) return fail("relative_gap_tolerance must be positive and finite");
+  if (!positive(infeasibility_tolerance)) return fail("infeasibility_tolerance must be positive and finite");
+  if (max_iterations < 0) return fail("max_iterations must be >= 0");
+  if (!(max_solve_time_in_seconds > 0.0)) return fail("max_solve_time_in_seconds must be positive");
+  if (!(step_fraction > 0.0 && step_fraction < 1.0)) return fail("step_fraction must be in (0, 1)");
+  if (!(min_step > 0.0 && min_step < 1.0)) return fail("min_step must be in (0, 1)");
+  if (!(static_regularization >= 0.0 && std::isfinite(static_regularization))) {
+    return fail("static_regularization must be >= 0 and finite");
+  }
+  if (!(dynamic_regularization_threshold >= 0.0 && std::isfinite(dynamic_regularization_threshold))) {
+    return fail("dynamic_regularization_threshold must be >= 0 and finite");
+  }
+  if (!positive(dynamic_regularization)) return fail("dynamic_regularization must be positive and finite");
+  if (max_refinement_steps < 0) return fail("max_refinement_steps must be >= 0");
+  if (!(refinement_tolerance >= 0.0)) return fail("refinement_tolerance must be >= 0");
+  if (sparse_cone_min_dimension < 1) return fail("sparse_cone_min_dimension must be >= 1");
+  return true;
+}
+
+namespace {
+
+double NormInf(const double* v, int n) {
+  double r = 0.0;
+  for (int i = 0; i < n; ++i) r = std::max(r, std::abs(v[i]));
+  return r;
+}
+
+// Compressed sparse column matrix with a fixed pattern.
+struct Csc {
+  int rows = 0;
+  int cols = 0;
+  std::vector<int> ptr;
+  std::vector<int> idx;
+  std::vector<double> val;
+
+  // out = M v (out has `rows` entries).
+  void Multiply(const double* v, double* out) const {
+    std::fill(out, out + rows, 0.0);
+    for (int j = 0; j < cols; ++j) {
+      const double vj = v[j];
+      if (vj == 0.0) continue;
+      for (int p = ptr[j]; p < ptr[j + 1]; ++p) out[idx[p]] += val[p] * vj;
+    }
+  }
+  // out = M' v (out has `cols` entries).
+  void MultiplyTransposed(const double* v, double* out) const {
+    for (int j = 0; j < cols; ++j) {
+      double sum = 0.0;
+      for (int p = ptr[j]; p < ptr[j + 1]; ++p) sum += val[p] * v[idx[p]];
+      out[j] = sum;
+    }
+  }
+};
+
+// One second-order cone of the internal problem (rotated cones are already mapped to standard ones).
+struct SocBlock {
+  int start = 0;          // first row in z and s
+  int dim = 0;
+  bool rotated = false;   // the first two rows were transformed
+  bool expanded = false;  // scaling enters the KKT system by the sparse expansion
+  int ext = -1;           // KKT index of the first of the two expansion rows (if expanded)
+  int slot_offset = 0;    // offset into dense_slots (dense) or expansion slots (expanded)
+};
+
+constexpr double kSqrtHalf = 0.70710678118654752440;
+
+}  // namespace
+
+struct Solver::Workspace {
+  // ---------------- pattern signature (what must match for reuse) ----------------
+  bool analyzed = false;
+  int n = 0, p = 0, m = 0;
+  ConeSpec cones;
+  int sparse_min_dim = 0;
+  std::vector<int> sig_a_ptr, sig_a_idx, sig_g_ptr, sig_g_idx;
+
+  // ---------------- internal problem data ----------------
+  int num_orthant = 0;
+  int degree = 0;
+  std::vector<SocBlock> socs;
+  Csc A;   // p x n
+  Csc G;   // m x n, rotated rows transformed
+  // For every stored entry of the user's G (in InnerIterator order): where it goes in G.val.
+  std::vector<int> g_target0, g_target1;  // g_target1 = -1 if only one target
+  std::vector<double> g_coef0, g_coef1;
+  std::vector<signed char> row_kind;      // 0 normal, 1 first rotated row, 2 second rotated row
+  Eigen::VectorXd c, b, h;                // internal copies (h transformed)
+
+  // ---------------- KKT system ----------------
+  int num_kkt = 0;
+  std::vector<int> perm, pinv;           // perm[new] = old, pinv[old] = new
+  std::vector<int> k_ptr, k_idx;         // permuted upper triangle, diagonal last in each column
+  std::vector<double> k_val;
+  std::vector<signed char> k_sign;       // expected pivot sign (permuted)
+  std::vector<double> k_reg;             // static regularization on the diagonal (permuted)
+  std::vector<int> diag_slot;            // unpermuted index -> slot of its diagonal
+  std::vector<int> a_slot, g_slot;       // per internal A / G entry -> slot of (col, row) entry
+  std::vector<int> dense_slots;          // per dense cone: strict upper triangle slots, row-major
+  std::vector<int> u_slots, v_slots;     // per expanded cone: slot of (z_i, u-row), (z_i, v-row)
+  SparseLdl ldl;
+
+  // ---------------- iterates and work vectors ----------------
+  Eigen::VectorXd x, y, z, s;
+  double tau = 1.0, kappa = 1.0;
+  Eigen::VectorXd rx, ry, rz;              // residuals
+  Eigen::VectorXd Ax, Gx, Aty, Gtz;        // products
+  Eigen::VectorXd w_orthant;               // orthant scaling sqrt(s/z)
+  Eigen::VectorXd wbar;                    // SOC scaling vectors (rows of socs)
+  std::vector<double> eta;                 // SOC scaling factors
+  Eigen::VectorXd lambda;                  // scaled point W z
+  Eigen::VectorXd rhs1, sol1, rhs2, sol2;  // unpermuted KKT vectors of size num_kkt
+  Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
+  Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, d_s;
+  Eigen::VectorXd best_x, best_y, best_z, best_s;
+
+  int refinement_counter = 0;
+
+  bool PatternMatches(const Problem& problem, int min_dim) const;
+  void Analyze(const Problem& problem, int min_dim);
+  void LoadValues(const Problem& problem, const Options& options);
+
+  // Cone operations on vectors of size m.
+  bool ComputeScaling();
+  void SetIdentityScaling();
+  void ApplyW(const double* in, double* out) const;
+  void ApplyWinv(const double* in, double* out) const;
+  void JordanProduct(const double* u, const double* v, double* out) const;
+  void JordanDivide(const double* l, const double* v, double* out) const;  // out = l \ v
+  double MaxStep(const double* u, const double* d) const;
+  double MinEigenvalue(const double* u) const;  // orthant: u_i, SOC: u0 - ||u1||
+  void AddIdentity(double* u, double alpha) const;
+
+  void UpdateKktScaling(double delta);
+  int Factor(const Options& options);
+  // Solves K sol = rhs (unpermuted vectors) with iterative refinement on the unregularized matrix.
+  void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options);
+  void KktMultiplyUnregularized(const double* v, double* out) const;  // permuted space
+};
+
+bool Solver::Workspace::PatternMatches(const Problem& problem, int min_dim) const {
+  if (!analyzed || min_dim != sparse_min_dim) return false;
+  if (problem.num_variables() != n || problem.num_equalities() != p || problem.num_cone_rows() != m) {
+    return false;
+  }
+  if (problem.cones.num_nonnegative != cones.num_nonnegative || problem.cones.soc_dims != cones.soc_dims ||
+      problem.cones.rotated_dims != cones.rotated_dims) {
+    return false;
+  }
+  auto same = [](const Eigen::SparseMatrix<double>& M, const std::vector<int>& ptr,
+                 const std::vector<int>& idx) {
+    std::size_t q = 0;
+    for (int j = 0; j < M.outerSize(); ++j) {
+      if (ptr[j] != static_cast<int>(q)) return false;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it, ++q) {
+        if (q >= idx.size() || idx[q] != it.row()) return false;
+      }
+    }
+    return q == idx.size();
+  };
+  return same(problem.A, sig_a_ptr, sig_a_idx) && same(problem.G, sig_g_ptr, sig_g_idx);
+}
+
+void Solver::Workspace::Analyze(const Problem& problem, int min_dim) {
+  n = problem.num_variables();
+  p = problem.num_equalities();
+  m = problem.num_cone_rows();
+  cones = problem.cones;
+  sparse_min_dim = min_dim;
+  auto signature = [](const Eigen::SparseMatrix<double>& M, std::vector<int>& ptr,
+                      std::vector<int>& idx) {
+    ptr.assign(M.outerSize() + 1, 0);
+    idx.clear();
+    for (int j = 0; j < M.outerSize(); ++j) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it) idx.push_back(it.row());
+      ptr[j + 1] = static_cast<int>(idx.size());
+    }
+  };
+  signature(problem.A, sig_a_ptr, sig_a_idx);
+  signature(problem.G, sig_g_ptr, sig_g_idx);
+
+  // ---- cones ----
+  num_orthant = cones.num_nonnegative;
+  degree = cones.Degree();
+  socs.clear();
+  row_kind.assign(m, 0);
+  int row = num_orthant;
+  int ext = n + p + m;
+  int dense_count = 0, expanded_count = 0;
+  auto add_cone = [&](int dim, bool rotated) {
+    SocBlock blk;
+    blk.start = row;
+    blk.dim = dim;
+    blk.rotated = rotated;
+    blk.expanded = dim >= min_dim && dim >= 2;
+    if (blk.expanded) {
+      blk.ext = ext;
+      ext += 2;
+      blk.slot_offset = expanded_count;
+      expanded_count += dim;
+    } else {
+      blk.slot_offset = dense_count;
+      dense_count += dim * (dim - 1) / 2;
+    }
+    if (rotated) {
+      row_kind[row] = 1;
+      row_kind[row + 1] = 2;
+    }
+    socs.push_back(blk);
+    row += dim;
+  };
+  for (int d : cones.soc_dims) add_cone(d, false);
+  for (int d : cones.rotated_dims) add_cone(d, true);
+  num_kkt = ext;
+
+  // ---- A (copy of the pattern) ----
+  A.rows = p;
+  A.cols = n;
+  A.ptr = sig_a_ptr;
+  A.idx = sig_a_idx;
+  A.val.assign(A.idx.size(), 0.0);
+
+  // ---- G with rotated rows transformed: pattern and contribution map ----
+  G.rows = m;
+  G.cols = n;
+  G.ptr.assign(n + 1, 0);
+  G.idx.clear();
+  std::vector<int> mark(m, -1), position(m, 0);
+  const std::size_t g_nnz = sig_g_idx.size();
+  g_target0.assign(g_nnz, -1);
+  g_target1.assign(g_nnz, -1);
+  g_coef0.assign(g_nnz, 0.0);
+  g_coef1.assign(g_nnz, 0.0);
+  for (int j = 0; j < n; ++j) {
+    const int begin = static_cast<int>(G.idx.size());
+    for (int q = sig_g_ptr[j]; q < sig_g_ptr[j + 1]; ++q) {
+      const int r = sig_g_idx[q];
+      const int r0 = row_kind[r] == 2 ? r - 1 : r;
+      const int count = row_kind[r] == 0 ? 1 : 2;
+      for (int t = 0; t < count; ++t) {
+        if (mark[r0 + t] != j) {
+          mark[r0 + t] = j;
+          G.idx.push_back(r0 + t);
+        }
+      }
+    }
+    std::sort(G.idx.begin() + begin, G.idx.end());
+    for (int q = begin; q < static_cast<int>(G.idx.size()); ++q) position[G.idx[q]] = q;
+    for (int q = sig_g_ptr[j]; q < sig_g_ptr[j + 1]; ++q) {
+      const int r = sig_g_idx[q];
+      if (row_kind[r] == 0) {
+        g_target0[q] = position[r];
+        g_coef0[q] = 1.0;
+      } else {
+        // t0 = (s0 + s1)/sqrt2, t1 = (s0 - s1)/sqrt2.
+        const int r0 = row_kind[r] == 1 ? r : r - 1;
+        g_target0[q] = position[r0];
+        g_coef0[q] = kSqrtHalf;
+        g_target1[q] = position[r0 + 1];
+        g_coef1[q] = row_kind[r] == 1 ? kSqrtHalf : -kSqrtHalf;
+      }
+    }
+    G.ptr[j + 1] = static_cast<int>(G.idx.size());
+  }
+  G.val.assign(G.idx.size(), 0.0);
+
+  // ---- KKT pattern (unpermuted upper triangle) ----
+  std::vector<std::pair<int, int>> entries;  // (row, col), row <= col
+  entries.reserve(num_kkt + A.idx.size() + G.idx.size() + 3 * m);
+  std::vector<int> diag_entry(num_kkt);
+  for (int k = 0; k < num_kkt; ++k) {
+    diag_entry[k] = static_cast<int>(entries.size());
+    entries.emplace_back(k, k);
+  }
+  std::vector<int> a_entry(A.idx.size()), g_entry(G.idx.size());
+  for (int j = 0; j < n; ++j) {
+    for (int q = A.ptr[j]; q < A.ptr[j + 1]; ++q) {
+      a_entry[q] = static_cast<int>(entries.size());
+      entries.emplace_back(j, n + A.idx[q]);
+    }
+    for (int q = G.ptr[j]; q < G.ptr[j + 1]; ++q) {
+      g_entry[q] = static_cast<int>(entries.size());
+      entries.emplace_back(j, n + p + G.idx[q]);
+    }
+  }
+  std::vector<int> dense_entry(dense_count), u_entry(expanded_count), v_entry(expanded_count);
+  const int z0 = n + p;
+  for (const SocBlock& blk : socs) {
+    if (blk.expanded) {
+      for (int i = 0; i < blk.dim; ++i) {
+        v_entry[blk.slot_offset + i] = static_cast<int>(entries.size());
+        entries.emplace_back(z0 + blk.start + i, blk.ext);
+        u_entry[blk.slot_offset + i] = static_cast<int>(entries.size());
+        entries.emplace_back(z0 + blk.start + i, blk.ext + 1);
+      }
+    } else {
+      int t = blk.slot_offset;
+      for (int i = 0; i < blk.dim; ++i) {
+        for (int j = i + 1; j < blk.dim; ++j) {
+          dense_entry[t++] = static_cast<int>(entries.size());
+          entries.emplace_back(z0 + blk.start + i, z0 + blk.start + j);
+        }
+      }
+    }
+  }
+
+  // ---- fill-reducing ordering ----
+  {
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(entries.size());
+    for (const auto& e : entries) triplets.emplace_back(e.first, e.second, 1.0);
+    Eigen::SparseMatrix<double, Eigen::ColMajor, int> pattern(num_kkt, num_kkt);
+    pattern.setFromTriplets(triplets.begin(), triplets.end());
+    Eigen::AMDOrdering<int> amd;
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> ordering;
+    amd(pattern, ordering);
+    perm.assign(num_kkt, 0);
+    pinv.assign(num_kkt, 0);
+    for (int k = 0; k < num_kkt; ++k) {
+      perm[k] = ordering.indices()[k];
+      pinv[perm[k]] = k;
+    }
+  }
+
+  // ---- permuted upper triangle in CSC, diagonal last in each column ----
+  std::vector<int> count(num_kkt + 1, 0);
+  std::vector<std::pair<int, int>> permuted(entries.size());  // (row, col) permuted
+  for (std::size_t e = 0; e < entries.size(); ++e) {
+    int r = pinv[entries[e].first], c2 = pinv[entries[e].second];
+    if (r > c2) std::swap(r, c2);
+    permuted[e] = {r, c2};
+    ++count[c2 + 1];
+  }
+  k_ptr.assign(num_kkt + 1, 0);
+  for (int k = 0; k < num_kkt; ++k) k_ptr[k + 1] = k_ptr[k] + count[k + 1];
+  std::vector<int> order(entries.size());
+  {
+    std::vector<int> next(k_ptr.begin(), k_ptr.end() - 1);
+    for (std::size_t e = 0; e < entries.size(); ++e) order[next[permuted[e].second]++] = static_cast<int>(e);
+  }
+  std::vector<int> slot_of_entry(entries.size());
+  k_idx.assign(entries.size(), 0);
+  for (int k = 0; k < num_kkt; ++k) {
+    std::sort(order.begin() + k_ptr[k], order.begin() + k_ptr[k + 1],
+              [&](int a, int b2) { return permuted[a].first < permuted[b2].first; });
+    for (int q = k_ptr[k]; q < k_ptr[k + 1]; ++q) {
+      slot_of_entry[order[q]] = q;
+      k_idx[q] = permuted[order[q]].first;
+    }
+  }
+  k_val.assign(entries.size(), 0.0);
+  diag_slot.resize(num_kkt);
+  for (int k = 0; k < num_kkt; ++k) diag_slot[k] = slot_of_entry[diag_entry[k]];
+  a_slot.resize(a_entry.size());
+  for (std::size_t q = 0; q < a_entry.size(); ++q) a_slot[q] = slot_of_entry[a_entry[q]];
+  g_slot.resize(g_entry.size());
+  for (std::size_t q = 0; q < g_entry.size(); ++q) g_slot[q] = slot_of_entry[g_entry[q]];
+  dense_slots.resize(dense_count);
+  for (int q = 0; q < dense_count; ++q) dense_slots[q] = slot_of_entry[dense_entry[q]];
+  u_slots.resize(expanded_count);
+  v_slots.resize(expanded_count);
+  for (int q = 0; q < expanded_count; ++q) {
+    u_slots[q] = slot_of_entry[u_entry[q]];
+    v_slots[q] = slot_of_entry[v_entry[q]];
+  }
+
+  // ---- expected pivot signs ----
+  k_sign.assign(num_kkt, -1);
+  for (int j = 0; j < n; ++j) k_sign[pinv[j]] = 1;
+  for (const SocBlock& blk : socs) {
+    if (blk.expanded) k_sign[pinv[blk.ext + 1]] = 1;  // the u-row has +1 on the diagonal
+  }
+  k_reg.assign(num_kkt, 0.0);
+
+  ldl.Analyze(num_kkt, k_ptr, k_idx);
+
+  // ---- work memory ----
+  for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
+  for (Eigen::VectorXd* v : {&y, &ry, &Ax, &dy, &best_y}) v->setZero(p);
+  for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &w_orthant, &wbar, &lambda, &dz, &ds, &ds_aff, &dz_aff,
+                             &dtmp1, &dtmp2, &dtmp3, &d_s, &best_z, &best_s}) {
+    v->setZero(m);
+  }
+  for (Eigen::VectorXd* v : {&rhs1, &sol1, &rhs2, &sol2, &perm_rhs, &perm_sol, &perm_res, &perm_corr}) {
+    v->setZero(num_kkt);
+  }
+  eta.assign(socs.size(), 1.0);
+  analyzed = true;
+}
+
+void Solver::Workspace::LoadValues(const Problem& problem, const Options& options) {
+  c = problem.c;
+  b = problem.b;
+  h = problem.h;
+  for (const SocBlock& blk : socs) {
+    if (!blk.rotated) continue;
+    const double h0 = problem.h[blk.start], h1 = problem.h[blk.start + 1];
+    h[blk.start] = kSqrtHalf * (h0 + h1);
+    h[blk.start + 1] = kSqrtHalf * (h0 - h1);
+  }
+  int q = 0;
+  for (int j = 0; j < problem.A.outerSize(); ++j) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(problem.A, j); it; ++it) A.val[q++] = it.value();
+  }
+  std::fill(G.val.begin(), G.val.end(), 0.0);
+  q = 0;
+  for (int j = 0; j < problem.G.outerSize(); ++j) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(problem.G, j); it; ++it, ++q) {
+      G.val[g_target0[q]] += g_coef0[q] * it.value();
+      if (g_target1[q] >= 0) G.val[g_target1[q]] += g_coef1[q] * it.value();
+    }
+  }
+  // Constant KKT entries.
+  const double delta = options.static_regularization;
+  for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
+  for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
+  for (int j = 0; j < n; ++j) {
+    k_val[diag_slot[j]] = delta;
+    k_reg[pinv[j]] = delta;
+  }
+  for (int i = 0; i < p; ++i) {
+    k_val[diag_slot[n + i]] = -delta;
+    k_reg[pinv[n + i]] = -delta;
+  }
+  for (int i = 0; i < m; ++i) k_reg[pinv[n + p + i]] = -delta;
+  for (const SocBlock& blk : socs) {
+    if (!blk.expanded) continue;
+    k_val[diag_slot[blk.ext]] = -1.0;
+    k_val[diag_slot[blk.ext + 1]] = 1.0;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cone operations. Orthant rows [0, num_orthant), then the second-order cones in `socs`.
+
+bool Solver::Workspace::ComputeScaling() {
+  for (int i = 0; i < num_orthant; ++i) {
+    if (!(s[i] > 0.0 && z[i] > 0.0)) return false;
+    w_orthant[i] = std::sqrt(s[i] / z[i]);
+    lambda[i] = std::sqrt(s[i] * z[i]);
+  }
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const double* sv = s.data() + blk.start;
+    const double* zv = z.data() + blk.start;
+    double* w = wbar.data() + blk.start;
+    const int d = blk.dim;
+    double s1 = 0.0, z1 = 0.0, sz = 0.0;
+    for (int i = 1; i < d; ++i) {
+      s1 += sv[i] * sv[i];
+      z1 += zv[i] * zv[i];
+      sz += sv[i] * zv[i];
+    }
+    s1 = std::sqrt(s1);
+    z1 = std::sqrt(z1);
+    const double sres = (sv[0] - s1) * (sv[0] + s1);
+    const double zres = (zv[0] - z1) * (zv[0] + z1);
+    if (!(sv[0] - s1 > 0.0 && zv[0] - z1 > 0.0 && sres > 0.0 && zres > 0.0)) return false;
+    const double sn = std::sqrt(sres), zn = std::sqrt(zres);
+    const double dot = (sv[0] * zv[0] + sz) / (sn * zn);  // sbar'zbar >= 1
+    const double gamma = std::sqrt(0.5 * (1.0 + dot));
+    const double f = 0.5 / gamma;
+    w[0] = f * (sv[0] / sn + zv[0] / zn);
+    double w1 = 0.0;
+    for (int i = 1; i < d; ++i) {
+      w[i] = f * (sv[i] / sn - zv[i] / zn);
+      w1 += w[i] * w[i];
+    }
+    // Restore w0^2 - ||w1||^2 = 1 against rounding.
+    w[0] = std::sqrt(1.0 + w1);
+    eta[k] = std::sqrt(sn / zn);
+  }
+  // lambda = W z for the cones.
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const double* w = wbar.data() + blk.start;
+    const double* zv = z.data() + blk.start;
+    double* l = lambda.data() + blk.start;
+    double w1z1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) w1z1 += w[i] * zv[i];
+    l[0] = eta[k] * (w[0] * zv[0] + w1z1);
+    const double coef = zv[0] + w1z1 / (1.0 + w[0]);
+    for (int i = 1; i < blk.dim; ++i) l[i] = eta[k] * (zv[i] + coef * w[i]);
+  }
+  return true;
+}
+
+void Solver::Workspace::SetIdentityScaling() {
+  w_orthant.setOnes();
+  wbar.setZero();
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    wbar[socs[k].start] = 1.0;
+    eta[k] = 1.0;
+  }
+}
+
+void Solver::Workspace::ApplyW(const double* in, double* out) const {
+  for (int i = 0; i < num_orthant; ++i) out[i] = w_orthant[i] * in[i];
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const double* w = wbar.data() + blk.start;
+    const double* v = in + blk.start;
+    double* o = out + blk.start;
+    double w1v1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) w1v1 += w[i] * v[i];
+    const double coef = v[0] + w1v1 / (1.0 + w[0]);
+    o[0] = eta[k] * (w[0] * v[0] + w1v1);
+    for (int i = 1; i < blk.dim; ++i) o[i] = eta[k] * (v[i] + coef * w[i]);
+  }
+}
+
+void Solver::Workspace::ApplyWinv(const double* in, double* out) const {
+  // W^{-1} = J Wbar J / eta.
+  for (int i = 0; i < num_orthant; ++i) out[i] = in[i] / w_orthant[i];
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const double* w = wbar.data() + blk.start;
+    const double* v = in + blk.start;
+    double* o = out + blk.start;
+    double w1v1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) w1v1 += w[i] * v[i];
+    const double coef = -v[0] + w1v1 / (1.0 + w[0]);
+    const double inv = 1.0 / eta[k];
+    o[0] = inv * (w[0] * v[0] - w1v1);
+    for (int i = 1; i < blk.dim; ++i) o[i] = inv * (v[i] + coef * w[i]);
+  }
+}
+
+void Solver::Workspace::JordanProduct(const double* u, const double* v, double* out) const {
+  for (int i = 0; i < num_orthant; ++i) out[i] = u[i] * v[i];
+  for (const SocBlock& blk : socs) {
+    const double* a = u + blk.start;
+    const double* c2 = v + blk.start;
+    double* o = out + blk.start;
+    double dot = a[0] * c2[0];
+    for (int i = 1; i < blk.dim; ++i) dot += a[i] * c2[i];
+    for (int i = 1; i < blk.dim; ++i) o[i] = a[0] * c2[i] + c2[0] * a[i];
+    o[0] = dot;
+  }
+}
+
+void Solver::Workspace::JordanDivide(const double* l, const double* v, double* out) const {
+  for (int i = 0; i < num_orthant; ++i) out[i] = v[i] / l[i];
+  for (const SocBlock& blk : socs) {
+    const double* a = l + blk.start;
+    const double* c2 = v + blk.start;
+    double* o = out + blk.start;
+    double a1 = 0.0, a1c1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) {
+      a1 += a[i] * a[i];
+      a1c1 += a[i] * c2[i];
+    }
+    const double det = a[0] * a[0] - a1;
+    const double u0 = (a[0] * c2[0] - a1c1) / det;
+    for (int i = 1; i < blk.dim; ++i) o[i] = (c2[i] - u0 * a[i]) / a[0];
+    o[0] = u0;
+  }
+}
+
+double Solver::Workspace::MaxStep(const double* u, const double* d) const {
+  double alpha = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < num_orthant; ++i) {
+    if (d[i] < 0.0) alpha = std::min(alpha, -u[i] / d[i]);
+  }
+  for (const SocBlock& blk : socs) {
+    const double* uv = u + blk.start;
+    const double* dv = d + blk.start;
+    double u1 = 0.0, d1 = 0.0, ud = 0.0;
+    for (int i = 1; i < blk.dim; ++i) {
+      u1 += uv[i] * uv[i];
+      d1 += dv[i] * dv[i];
+      ud += uv[i] * dv[i];
+    }
+    // f(a) = qa a^2 + 2 qb a + qc is the cone's determinant along the ray; the step ends at its
+    // smallest positive root (f > 0 on [0, root) keeps u + a d inside the cone).
+    const double qa = dv[0] * dv[0] - d1;
+    const double qb = uv[0] * dv[0] - ud;
+    const double un = std::sqrt(u1);
+    const double qc = (uv[0] - un) * (uv[0] + un);
+    if (!(qc > 0.0)) return 0.0;
+    double root = std::numeric_limits<double>::infinity();
+    if (qa == 0.0) {
+      if (qb < 0.0) root = -qc / (2.0 * qb);
+    } else {
+      const double disc = qb * qb - qa * qc;
+      if (disc >= 0.0) {
+        const double q = -(qb + std::copysign(std::sqrt(disc), qb));
+        const double r1 = q / qa;
+        const double r2 = q != 0.0 ? qc / q : std::numeric_limits<double>::infinity();
+        if (r1 > 0.0) root = std::min(root, r1);
+        if (r2 > 0.0) root = std::min(root, r2);
+      }
+    }
+    // Guard: the first coordinate must also stay positive.
+    if (dv[0] < 0.0) root = std::min(root, -uv[0] / dv[0]);
+    alpha = std::min(alpha, root);
+  }
+  return alpha;
+}
+
+double Solver::Workspace::MinEigenvalue(const double* u) const {
+  double r = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < num_orthant; ++i) r = std::min(r, u[i]);
+  for (const SocBlock& blk : socs) {
+    double n1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) n1 += u[blk.start + i] * u[blk.start + i];
+    r = std::min(r, u[blk.start] - std::sqrt(n1));
+  }
+  return r;
+}
+
+void Solver::Workspace::AddIdentity(double* u, double alpha) const {
+  for (int i = 0; i < num_orthant; ++i) u[i] += alpha;
+  for (const SocBlock& blk : socs) u[blk.start] += alpha;
+}
+
+// ---------------------------------------------------------------------------------------------
+// KKT system.
+
+void Solver::Workspace::UpdateKktScaling(double delta) {
+  const int z0 = n + p;
+  for (int i = 0; i < num_orthant; ++i) {
+    k_val[diag_slot[z0 + i]] = -w_orthant[i] * w_orthant[i] - delta;
+  }
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const double* w = wbar.data() + blk.start;
+    const double e2 = eta[k] * eta[k];
+    const int d = blk.dim;
+    if (!blk.expanded) {
+      // W'W = eta^2 (2 w w' - J).
+      k_val[diag_slot[z0 + blk.start]] = -e2 * (2.0 * w[0] * w[0] - 1.0) - delta;
+      for (int i = 1; i < d; ++i) k_val[diag_slot[z0 + blk.start + i]] = -e2 * (2.0 * w[i] * w[i] + 1.0) - delta;
+      int t = blk.slot_offset;
+      for (int i = 0; i < d; ++i) {
+        for (int j = i + 1; j < d; ++j) k_val[dense_slots[t++]] = -2.0 * e2 * w[i] * w[j];
+      }
+    } else {
+      // W'W = eta^2 (D + u u' - v v'), D = diag(d0, 1, ..., 1), u = (u0, u1 w1), v = (0, v1 w1), with
+      // d0 = 1 / (2 (2 w0^2 - 1)) so that D - v v' stays positive definite (quasi-definiteness).
+      const double w0 = w[0];
+      const double t2 = 2.0 * w0 * w0 - 1.0;
+      const double d0 = 0.5 / t2;
+      const double u0 = std::sqrt(t2 - d0);
+      const double u1 = 2.0 * w0 / u0;
+      const double v1 = std::sqrt(2.0 * (1.0 + d0)) / u0;
+      const double et = eta[k];
+      k_val[diag_slot[z0 + blk.start]] = -e2 * d0 - delta;
+      k_val[u_slots[blk.slot_offset]] = et * u0;
+      k_val[v_slots[blk.slot_offset]] = 0.0;
+      for (int i = 1; i < d; ++i) {
+        k_val[diag_slot[z0 + blk.start + i]] = -e2 - delta;
+        k_val[u_slots[blk.slot_offset + i]] = et * u1 * w[i];
+        k_val[v_slots[blk.slot_offset + i]] = et * v1 * w[i];
+      }
+    }
+  }
+}
+
+int Solver::Workspace::Factor(const Options& options) {
+  return ldl.Factor(k_val.data(), k_sign.data(), options.dynamic_regularization_threshold,
+                    options.dynamic_regularization);
+}
+
+void Solver::Workspace::KktMultiplyUnregularized(const double* v, double* out) const {
+  std::fill(out, out + num_kkt, 0.0);
+  for (int j = 0; j < num_kkt; ++j) {
+    const double vj = v[j];
+    double sum = 0.0;
+    const int end = k_ptr[j + 1] - 1;  // diagonal is last
+    for (int q = k_ptr[j]; q < end; ++q) {
+      const int i = k_idx[q];
+      out[i] += k_val[q] * vj;
+      sum += k_val[q] * v[i];
+    }
+    out[j] += sum + (k_val[end] - k_reg[j]) * vj;
+  }
+}
+
+void Solver::Workspace::SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options) {
+  for (int k = 0; k < num_kkt; ++k) perm_rhs[k] = rhs[perm[k]];
+  perm_sol = perm_rhs;
+  ldl.Solve(perm_sol.data());
+  const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
+  for (int step = 0; step < options.max_refinement_steps; ++step) {
+    KktMultiplyUnregularized(perm_sol.data(), perm_res.data());
+    perm_res = perm_rhs - perm_res;
+    const double norm = NormInf(perm_res.data(), num_kkt);
+    if (!(norm > bound)) break;
+    ldl.Solve(perm_res.data());
+    perm_sol += perm_res;
+    ++refinement_counter;
+  }
+  for (int k = 0; k < num_kkt; ++k) sol[perm[k]] = perm_sol[k];
+}
+
+// ---------------------------------------------------------------------------------------------
+
+Solver::Solver(Options options) : options_(std::move(options)), workspace_(std::make_unique<Workspace>()) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw std::invalid_argument("Solver::Options: " + error);
+}
+
+Solver::~Solver() = default;
+Solver::Solver(Solver&&) noexcept = default;
+Solver& Solver::operator=(Solver&&) noexcept = default;
+
+void Solver::set_options(const Options& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument("Solver::Options: " + error);
+  options_ = options;
+}
+
+Result Solver::Solve(const Problem& problem) {
+  using Clock = std::chrono::steady_clock;
+  const auto start_time = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start_time).count(); };
+
+  std::string error;
+  if (!options_.IsValid(&error)) throw std::invalid_argument("Solver::Options: " + error);
+  problem.Validate();
+
+  if (!workspace_) workspace_ = std::make_unique<Workspace>();
+  Workspace& W = *workspace_;
+  Result result;
+  result.reused_symbolic = W.PatternMatches(problem, options_.sparse_cone_min_dimension);
+  if (!result.reused_symbolic) W.Analyze(problem, options_.sparse_cone_min_dimension);
+  W.LoadValues(problem, options_);
+  W.refinement_counter = 0;
+
+  const int n = W.n, p = W.p, m = W.m, N = W.num_kkt;
+  const double delta = options_.static_regularization;
+  const double norm_c = NormInf(W.c.data(), n);
+  const double norm_b = NormInf(W.b.data(), p);
+  const double norm_h = NormInf(W.h.data(), m);
+  int dynamic_regs = 0;
+
+  // ---- initial point: two solves with the identity scaling ----
+  W.SetIdentityScaling();
+  W.UpdateKktScaling(delta);
+  dynamic_regs += W.Factor(options_);
+  W.rhs1.setZero();
+  W.rhs1.segment(n, p) = W.b;
+  W.rhs1.segment(n + p, m) = W.h;
+  W.SolveKkt(W.rhs1, W.sol1, options_);
+  W.x = W.sol1.head(n);
+  W.s = -W.sol1.segment(n + p, m);
+  W.rhs2.setZero();
+  W.rhs2.head(n) = -W.c;
+  W.SolveKkt(W.rhs2, W.sol2, options_);
+  W.y = W.sol2.segment(n, p);
+  W.z = W.sol2.segment(n + p, m);
+  {
+    const double alpha_p = -W.MinEigenvalue(W.s.data());
+    if (alpha_p >= 0.0 && m > 0) W.AddIdentity(W.s.data(), 1.0 + alpha_p);
+    const double alpha_d = -W.MinEigenvalue(W.z.data());
+    if (alpha_d >= 0.0 && m > 0) W.AddIdentity(W.z.data(), 1.0 + alpha_d);
+  }
+  W.tau = 1.0;
+  W.kappa = 1.0;
+
+  const double nu = static_cast<double>(W.degree);
+  Status status = Status::kIterationLimit;
+  std::string message;
+  int iteration = 0;
+  double step = 0.0, sigma = 0.0;
+  int iteration_refinements = 0;
+  double pres = 0.0, dres = 0.0, pcost = 0.0, dcost = 0.0, gap = 0.0;
+
+  for (;; ++iteration) {
+    // ---- residuals of the homogeneous embedding ----
+    W.A.Multiply(W.x.data(), W.Ax.data());
+    W.G.Multiply(W.x.data(), W.Gx.data());
+    W.A.MultiplyTransposed(W.y.data(), W.Aty.data());
+    W.G.MultiplyTransposed(W.z.data(), W.Gtz.data());
+    const double tau = W.tau, kappa = W.kappa;
+    W.rx = W.Aty + W.Gtz + tau * W.c;
+    W.ry = W.Ax - tau * W.b;
+    W.rz = W.Gx + W.s - tau * W.h;
+    const double cx = W.c.dot(W.x), by = W.b.dot(W.y), hz = W.h.dot(W.z);
+    const double rtau = kappa + cx + by + hz;
+    const double sz = W.s.dot(W.z);
+    const double mu = (sz + tau * kappa) / (nu + 1.0);
+
+    // ---- convergence measures on (x, y, z, s) / tau ----
+    pcost = cx / tau;
+    dcost = -(by + hz) / tau;
+    gap = sz / (tau * tau);
+    pres = std::max(NormInf(W.ry.data(), p), NormInf(W.rz.data(), m)) / tau /
+           std::max({1.0, norm_b, norm_h, NormInf(W.Ax.data(), p) / tau, NormInf(W.Gx.data(), m) / tau,
+                     NormInf(W.s.data(), m) / tau});
+    dres = NormInf(W.rx.data(), n) / tau /
+           std::max({1.0, norm_c, NormInf(W.Aty.data(), n) / tau, NormInf(W.Gtz.data(), n) / tau});
+
+    if (options_.callback) {
+      IterationInfo info;
+      info.iteration = iteration;
+      info.primal_objective = pcost;
+      info.dual_objective = dcost;
+      info.gap = gap;
+      info.primal_residual = pres;
+      info.dual_residual = dres;
+      info.tau = tau;
+      info.kappa = kappa;
+      info.mu = mu;
+      info.step = step;
+      info.sigma = sigma;
+      info.refinement_steps = iteration_refinements;
+      options_.callback(info);
+    }
+
+    if (!std::isfinite(pres) || !std::isfinite(dres) || !std::isfinite(gap) || !std::isfinite(mu)) {
+      status = Status::kNumericalError;
+      message = "non-finite iterate";
+      break;
+    }
+
+    // ---- termination ----
+    const double pd_gap = std::abs(pcost - dcost);
+    const double gap_scale = std::min(std::abs(pcost), std::abs(dcost));
+    const bool gap_ok = (gap <= options_.absolute_gap_tolerance ||
+                         gap <= options_.relative_gap_tolerance * gap_scale) &&
+                        (pd_gap <= options_.absolute_gap_tolerance ||
+                         pd_gap <= options_.relative_gap_tolerance * gap_scale);
+    if (pres <= options_.feasibility_tolerance && dres <= options_.feasibility_tolerance && gap_ok) {
+      status = Status::kOptimal;
+      message = "tolerances met";
+      break;
+    }
+    if (kappa > tau) {
+      // Primal infeasibility: b'y + h'z < 0 with A'y + G'z ~ 0.
+      const double bz = by + hz;
+      if (bz < 0.0) {
+        const double res = NormInf((W.Aty + W.Gtz).eval().data(), n) / -bz;
+        if (res <= options_.infeasibility_tolerance) {
+          status = Status::kPrimalInfeasible;
+          message = "certificate of primal infeasibility found";
+          break;
+        }
+      }
+      if (cx < 0.0) {
+        const double res = std::max(NormInf(W.Ax.data(), p), NormInf((W.Gx + W.s).eval().data(), m)) / -cx;
+        if (res <= options_.infeasibility_tolerance) {
+          status = Status::kDualInfeasible;
+          message = "certificate of dual infeasibility (unboundedness) found";
+          break;
+        }
+      }
+    }
+    if (iteration >= options_.max_iterations) {
+      status = Status::kIterationLimit;
+      message = "max_iterations reached";
+      break;
+    }
+    if (elapsed() > options_.max_solve_time_in_seconds) {
+      status = Status::kIterationLimit;
+      message = "max_solve_time_in_seconds reached";
+      break;
+    }
+
+    // ---- scaling and factorization ----
+    if (!W.ComputeScaling()) {
+      status = Status::kNumericalError;
+      message = "iterate left the cone interior";
+      break;
+    }
+    W.UpdateKktScaling(delta);
+    dynamic_regs += W.Factor(options_);
+    const int refinements_before = W.refinement_counter;
+
+    // sol1 = K^{-1} [-c; b; h].
+    W.rhs1.head(n) = -W.c;
+    W.rhs1.segment(n, p) = W.b;
+    W.rhs1.segment(n + p, m) = W.h;
+    W.SolveKkt(W.rhs1, W.sol1, options_);
+    const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
+                         W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
+
+    // One Newton direction for the residual weight `eta_r`, complementarity right-hand side W.d_s
+    // (cones) and d_kappa. Fills dx, dy, dz, ds and returns (dtau, dkappa).
+    auto direction = [&](double eta_r, double d_kappa, double& dtau, double& dkappa) {
+      // dtmp1 = lambda \ d_s, dtmp2 = W dtmp1.
+      W.JordanDivide(W.lambda.data(), W.d_s.data(), W.dtmp1.data());
+      W.ApplyW(W.dtmp1.data(), W.dtmp2.data());
+      W.rhs2.head(n) = -eta_r * W.rx;
+      W.rhs2.segment(n, p) = -eta_r * W.ry;
+      W.rhs2.segment(n + p, m) = -eta_r * W.rz + W.dtmp2;
+      if (N > n + p + m) W.rhs2.tail(N - n - p - m).setZero();
+      W.SolveKkt(W.rhs2, W.sol2, options_);
+      const double numer = -eta_r * rtau + d_kappa / tau -
+                           (W.c.dot(W.sol2.head(n)) + W.b.dot(W.sol2.segment(n, p)) +
+                            W.h.dot(W.sol2.segment(n + p, m)));
+      dtau = numer / denom;
+      W.dx = W.sol2.head(n) + dtau * W.sol1.head(n);
+      W.dy = W.sol2.segment(n, p) + dtau * W.sol1.segment(n, p);
+      W.dz = W.sol2.segment(n + p, m) + dtau * W.sol1.segment(n + p, m);
+      // ds = -W (lambda \ d_s) - W'W dz.
+      W.ApplyW(W.dz.data(), W.dtmp1.data());
+      W.ApplyW(W.dtmp1.data(), W.dtmp3.data());
+      W.ds = -W.dtmp2 - W.dtmp3;
+      dkappa = -(d_kappa + kappa * dtau) / tau;
+    };
+    auto max_step = [&](double dtau, double dkappa) {
+      double alpha = std::min(W.MaxStep(W.s.data(), W.ds.data()), W.MaxStep(W.z.data(), W.dz.data()));
+      if (dtau < 0.0) alpha = std::min(alpha, -tau / dtau);
+      if (dkappa < 0.0) alpha = std::min(alpha, -kappa / dkappa);
+      return alpha;
+    };
+
+    // ---- predictor (affine scaling) ----
+    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
+    double dtau_a = 0.0, dkappa_a = 0.0;
+    direction(1.0, tau * kappa, dtau_a, dkappa_a);
+    const double alpha_a = std::min(1.0, max_step(dtau_a, dkappa_a));
+    sigma = std::pow(1.0 - alpha_a, 3);
+    sigma = std::min(1.0, std::max(0.0, sigma));
+
+    // ---- corrector: d_s = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e ----
+    W.ApplyWinv(W.ds.data(), W.ds_aff.data());
+    W.ApplyW(W.dz.data(), W.dz_aff.data());
+    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());
+    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
+    W.d_s += W.dtmp1;
+    W.AddIdentity(W.d_s.data(), -sigma * mu);
+    const double d_kappa = tau * kappa + dtau_a * dkappa_a - sigma * mu;
+    double dtau = 0.0, dkappa = 0.0;
+    direction(1.0 - sigma, d_kappa, dtau, dkappa);
+    step = std::min(1.0, options_.step_fraction * max_step(dtau, dkappa));
+    iteration_refinements = W.refinement_counter - refinements_before;
+
+    if (!std::isfinite(step) || !std::isfinite(dtau) || !std::isfinite(W.dx.squaredNorm()) ||
+        !std::isfinite(W.dz.squaredNorm()) || !std::isfinite(W.ds.squaredNorm()) ||
+        !std::isfinite(W.dy.squaredNorm())) {
+      status = Status::kNumericalError;
+      message = "non-finite search direction";
+      break;
+    }
+    if (step < options_.min_step) {
+      status = Status::kNumericalError;
+      message = "step length below min_step";
+      break;
+    }
+    W.x += step * W.dx;
+    W.y += step * W.dy;
+    W.z += step * W.dz;
+    W.s += step * W.ds;
+    W.tau += step * dtau;
+    W.kappa += step * dkappa;
+  }
+
+  // ---- output in the user's coordinates ----
+  result.status = status;
+  result.message = message;
+  result.iterations = iteration;
+  result.num_refinement_steps = W.refinement_counter;
+  result.num_dynamic_regularizations = dynamic_regs;
+  result.x.setZero(n);
+  result.y.setZero(p);
+  result.z.setZero(m);
+  result.s.setZero(m);
+  auto unrotate = [&](Eigen::VectorXd& v) {
+    for (const SocBlock& blk : W.socs) {
+      if (!blk.rotated) continue;
+      const double t0 = v[blk.start], t1 = v[blk.start + 1];
+      v[blk.start] = kSqrtHalf * (t0 + t1);
+      v[blk.start + 1] = kSqrtHalf * (t0 - t1);
+    }
+  };
+  if (status == Status::kPrimalInfeasible) {
+    const double scale = -1.0 / (W.b.dot(W.y) + W.h.dot(W.z));
+    result.y = scale * W.y;
+    result.z = scale * W.z;
+    unrotate(result.z);
+  } else if (status == Status::kDualInfeasible) {
+    const double scale = -1.0 / W.c.dot(W.x);
+    result.x = scale * W.x;
+    result.s = scale * W.s;
+    unrotate(result.s);
+  } else {
+    const double inv = 1.0 / W.tau;
+    result.x = inv * W.x;
+    result.y = inv * W.y;
+    result.z = inv * W.z;
+    result.s = inv * W.s;
+    unrotate(result.z);
+    unrotate(result.s);
+  }
+  // Objectives and residuals in the user's data (for certificates: of the normalized ray).
+  result.primal_objective = problem.c.dot(result.x);
+  result.dual_objective = -problem.b.dot(result.y) - problem.h.dot(result.z);
+  result.gap = result.s.dot(result.z);
+  {
+    const Eigen::VectorXd Ax = problem.A * result.x;
+    const Eigen::VectorXd Gx = problem.G * result.x;
+    const Eigen::VectorXd Aty = problem.A.transpose() * result.y;
+    const Eigen::VectorXd Gtz = problem.G.transpose() * result.z;
+    auto ninf = [](const Eigen::VectorXd& v) { return v.size() ? v.lpNorm<Eigen::Infinity>() : 0.0; };
+    if (status == Status::kPrimalInfeasible) {
+      result.primal_residual = 0.0;
+      result.dual_residual = ninf(Aty + Gtz);
+    } else if (status == Status::kDualInfeasible) {
+      result.primal_residual = std::max(ninf(Ax), ninf(Gx + result.s));
+      result.dual_residual = 0.0;
+    } else {
+      result.primal_residual =
+          std::max(ninf(Ax - problem.b), ninf(Gx + result.s - problem.h)) /
+          std::max({1.0, ninf(problem.b), ninf(problem.h), ninf(Ax), ninf(Gx), ninf(result.s)});
+      result.dual_residual = ninf(problem.c + Aty + Gtz) /
+                             std::max({1.0, ninf(problem.c), ninf(Aty), ninf(Gtz)});
+    }
+  }
+  result.solve_time_seconds = elapsed();
+  return result;
+}
+
+}  // namespace timeopt::conic

@@ -1,0 +1,121 @@
+#include "timeopt/conic/sparse_ldl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace timeopt::conic {
+
+void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
+  if (n < 0 || static_cast<int>(col_ptr.size()) != n + 1) {
+    throw std::invalid_argument("SparseLdl::Analyze: col_ptr has " + std::to_string(col_ptr.size()) +
+                                " entries, expected " + std::to_string(n + 1));
+  }
+  n_ = n;
+  a_col_ptr_ = col_ptr;
+  a_row_ = row_idx;
+
+  // Elimination tree (with path-compressed ancestors) and the pattern of every row of L: row k of L
+  // holds the nodes met when walking up the tree from each i < k in column k of the upper triangle,
+  // stopping at nodes already visited for k.
+  std::vector<int> parent(n, -1), ancestor(n, -1), mark(n, -1);
+  for (int k = 0; k < n; ++k) {
+    for (int p = col_ptr[k]; p < col_ptr[k + 1]; ++p) {
+      int i = row_idx[p];
+      while (i != -1 && i < k) {
+        const int next = ancestor[i];
+        ancestor[i] = k;
+        if (next == -1) {
+          parent[i] = k;
+          break;
+        }
+        i = next;
+      }
+    }
+  }
+  row_ptr_.assign(n + 1, 0);
+  row_col_.clear();
+  std::vector<int> col_count(n, 0);
+  for (int k = 0; k < n; ++k) {
+    mark[k] = k;
+    const std::size_t start = row_col_.size();
+    for (int p = col_ptr[k]; p < col_ptr[k + 1]; ++p) {
+      for (int i = row_idx[p]; i != -1 && i < k && mark[i] != k; i = parent[i]) {
+        mark[i] = k;
+        row_col_.push_back(i);
+        ++col_count[i];
+      }
+    }
+    std::sort(row_col_.begin() + static_cast<std::ptrdiff_t>(start), row_col_.end());
+    row_ptr_[k + 1] = static_cast<int>(row_col_.size());
+  }
+  l_col_ptr_.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i) l_col_ptr_[i + 1] = l_col_ptr_[i] + col_count[i];
+  l_row_.assign(row_col_.size(), 0);
+  l_val_.assign(row_col_.size(), 0.0);
+  row_slot_.assign(row_col_.size(), 0);
+  std::vector<int> fill(l_col_ptr_.begin(), l_col_ptr_.end() - 1);
+  flops_ = 0;
+  for (int k = 0; k < n; ++k) {
+    for (int q = row_ptr_[k]; q < row_ptr_[k + 1]; ++q) {
+      const int i = row_col_[q];
+      const int slot = fill[i]++;
+      l_row_[slot] = k;
+      row_slot_[q] = slot;
+      flops_ += slot - l_col_ptr_[i] + 1;
+    }
+  }
+  d_.assign(n, 0.0);
+  work_.assign(n, 0.0);
+}
+
+int SparseLdl::Factor(const double* values, const signed char* signs, double threshold,
+                      double replacement) {
+  int regularized = 0;
+  double* work = work_.data();
+  double* lx = l_val_.data();
+  const int* li = l_row_.data();
+  for (int k = 0; k < n_; ++k) {
+    const int a_end = a_col_ptr_[k + 1];
+    for (int p = a_col_ptr_[k]; p < a_end; ++p) work[a_row_[p]] = values[p];
+    double d = work[k];
+    work[k] = 0.0;
+    const int q_end = row_ptr_[k + 1];
+    for (int q = row_ptr_[k]; q < q_end; ++q) {
+      const int i = row_col_[q];
+      const double yi = work[i];
+      work[i] = 0.0;
+      const int slot = row_slot_[q];
+      for (int p = l_col_ptr_[i]; p < slot; ++p) work[li[p]] -= lx[p] * yi;
+      const double lki = yi / d_[i];
+      lx[slot] = lki;
+      d -= lki * yi;
+    }
+    if (!(signs[k] * d > threshold)) {  // also catches NaN
+      d = signs[k] * replacement;
+      ++regularized;
+    }
+    d_[k] = d;
+  }
+  return regularized;
+}
+
+void SparseLdl::Solve(double* x) const {
+  const double* lx = l_val_.data();
+  const int* li = l_row_.data();
+  for (int i = 0; i < n_; ++i) {
+    const double xi = x[i];
+    if (xi != 0.0) {
+      for (int p = l_col_ptr_[i]; p < l_col_ptr_[i + 1]; ++p) x[li[p]] -= lx[p] * xi;
+    }
+  }
+  for (int i = 0; i < n_; ++i) x[i] /= d_[i];
+  for (int i = n_ - 1; i >= 0; --i) {
+    double xi = x[i];
+    for (int p = l_col_ptr_[i]; p < l_col_ptr_[i + 1]; ++p) xi -= lx[p] * x[li[p]];
+    x[i] = xi;
+  }
+}
+
+}  // namespace timeopt::conic

@@ -1,0 +1,546 @@
+#include "timeopt/conic/solver.h"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "timeopt/conic/problem_builder.h"
+
+namespace timeopt::conic {
+namespace {
+
+using ::testing::HasSubstr;
+
+AffineExpr Var(int v, double coef = 1.0, double constant = 0.0) { return AffineExpr{{{v, coef}}, constant}; }
+AffineExpr Const(double value) { return AffineExpr{{}, value}; }
+
+// ------------------------------------------------------------------------------------------------
+// Problems with known optimal values, each with an independent (closed-form) answer.
+
+struct Example {
+  std::string name;
+  std::function<Problem()> make;
+  double optimal_value;
+  Eigen::VectorXd optimal_x;  // empty if x is not unique or not checked
+};
+
+std::vector<Example> Examples() {
+  std::vector<Example> examples;
+  // LP: max x + y s.t. x + 2y <= 4, 3x + y <= 6, x, y >= 0. Vertex (1.6, 1.2), value -2.8.
+  examples.push_back({"lp_vertex", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(2);
+                        b.SetObjectiveCoefficient(0, -1.0);
+                        b.SetObjectiveCoefficient(1, -1.0);
+                        b.AddLessEqual({{0, 1.0}, {1, 2.0}}, 4.0);
+                        b.AddLessEqual({{0, 3.0}, {1, 1.0}}, 6.0);
+                        b.AddNonnegative(Var(0));
+                        b.AddNonnegative(Var(1));
+                        return b.Build();
+                      },
+                      -2.8, Eigen::Vector2d(1.6, 1.2)});
+  // LP on the simplex: min x0 + 2 x1 + 3 x2, sum x = 1, x >= 0 -> x = e0.
+  examples.push_back({"lp_simplex", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(3);
+                        for (int i = 0; i < 3; ++i) {
+                          b.SetObjectiveCoefficient(i, i + 1.0);
+                          b.AddNonnegative(Var(i));
+                        }
+                        b.AddEquality({{0, 1.0}, {1, 1.0}, {2, 1.0}}, 1.0);
+                        return b.Build();
+                      },
+                      1.0, Eigen::Vector3d(1.0, 0.0, 0.0)});
+  // LP with a free variable: min t s.t. t >= |x - 3|, x <= 1 -> x = 1, t = 2.
+  examples.push_back({"lp_absolute_value", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(2);  // t, x
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.AddNonnegative(AffineExpr{{{0, 1.0}, {1, -1.0}}, 3.0});  // t - x + 3 >= 0
+                        b.AddNonnegative(AffineExpr{{{0, 1.0}, {1, 1.0}}, -3.0});  // t + x - 3 >= 0
+                        b.AddLessEqual({{1, 1.0}}, 1.0);
+                        return b.Build();
+                      },
+                      2.0, Eigen::Vector2d(2.0, 1.0)});
+  // SOC: distance from (1, 2) to the line x + y = 1 is |1 + 2 - 1| / sqrt(2) = sqrt(2).
+  examples.push_back({"soc_distance_to_line", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(3);  // t, x, y
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.AddEquality({{1, 1.0}, {2, 1.0}}, 1.0);
+                        b.AddSecondOrderCone({Var(0), Var(1, 1.0, -1.0), Var(2, 1.0, -2.0)});
+                        return b.Build();
+                      },
+                      std::sqrt(2.0), Eigen::Vector3d(std::sqrt(2.0), 0.0, 1.0)});
+  // Optimum on the boundary of the unit disc: min x + y, ||(x, y)|| <= 1 -> x = y = -1/sqrt(2).
+  examples.push_back({"soc_boundary_of_disc", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(2);
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.SetObjectiveCoefficient(1, 1.0);
+                        b.AddSecondOrderCone({Const(1.0), Var(0), Var(1)});
+                        return b.Build();
+                      },
+                      -std::sqrt(2.0), Eigen::Vector2d(-std::sqrt(0.5), -std::sqrt(0.5))});
+  // A large cone (dimension 11, sparse expansion by default): min sum x s.t. ||x|| <= 1 -> -sqrt(10).
+  examples.push_back({"soc_large_ball", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(10);
+                        std::vector<AffineExpr> rows = {Const(1.0)};
+                        for (int i = 0; i < 10; ++i) {
+                          b.SetObjectiveCoefficient(i, 1.0);
+                          rows.push_back(Var(i));
+                        }
+                        b.AddSecondOrderCone(rows);
+                        return b.Build();
+                      },
+                      -std::sqrt(10.0), Eigen::VectorXd::Constant(10, -1.0 / std::sqrt(10.0))});
+  // Fermat point of the equilateral triangle (0,0), (1,0), (1/2, sqrt3/2): the centroid, each
+  // distance 1/sqrt3, total sqrt3.
+  examples.push_back({"soc_fermat_point", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(5);  // px, py, t0, t1, t2
+                        const double pts[3][2] = {{0, 0}, {1, 0}, {0.5, std::sqrt(3.0) / 2}};
+                        for (int k = 0; k < 3; ++k) {
+                          b.SetObjectiveCoefficient(2 + k, 1.0);
+                          b.AddSecondOrderCone({Var(2 + k), Var(0, 1.0, -pts[k][0]), Var(1, 1.0, -pts[k][1])});
+                        }
+                        return b.Build();
+                      },
+                      std::sqrt(3.0), Eigen::VectorXd()});
+  // Rotated cone: min t s.t. t u >= x^2 with u = 2, x = 3, i.e. 2 t (u/2) >= x^2 -> t = 4.5.
+  examples.push_back({"rotated_t_u_x2", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(3);  // t, u, x
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.AddEquality({{1, 1.0}}, 2.0);
+                        b.AddEquality({{2, 1.0}}, 3.0);
+                        b.AddRotatedCone({Var(0), Var(1, 0.5), Var(2)});
+                        return b.Build();
+                      },
+                      4.5, Eigen::Vector3d(4.5, 2.0, 3.0)});
+  // Hyperbolic constraint: min x + y s.t. x y >= 1 -> x = y = 1 (rotated cone (x, y, sqrt2)).
+  examples.push_back({"rotated_hyperbola", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(2);
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.SetObjectiveCoefficient(1, 1.0);
+                        b.AddRotatedCone({Var(0), Var(1), Const(std::sqrt(2.0))});
+                        return b.Build();
+                      },
+                      2.0, Eigen::Vector2d(1.0, 1.0)});
+  // Least squares as an SOC: min ||M x - q||; the answer from the normal equations (dense QR).
+  {
+    Eigen::MatrixXd M(5, 3);
+    M << 1, 2, 0, 0, 1, 1, 3, 0, 1, 1, 1, 1, 2, -1, 0;
+    Eigen::VectorXd q(5);
+    q << 1, -2, 3, 0.5, 4;
+    const Eigen::VectorXd xs = M.colPivHouseholderQr().solve(q);
+    Eigen::VectorXd expected(4);
+    expected << (M * xs - q).norm(), xs;
+    examples.push_back({"least_squares", [M, q] {
+                          ProblemBuilder b;
+                          b.AddVariables(4);  // t, x0..x2
+                          b.SetObjectiveCoefficient(0, 1.0);
+                          std::vector<AffineExpr> rows = {Var(0)};
+                          for (int i = 0; i < 5; ++i) {
+                            AffineExpr e{{}, -q[i]};
+                            for (int j = 0; j < 3; ++j) e.terms.push_back({1 + j, M(i, j)});
+                            rows.push_back(e);
+                          }
+                          b.AddSecondOrderCone(rows);
+                          return b.Build();
+                        },
+                        expected[0], expected});
+  }
+  // Minimum-variance portfolio: min x' S x s.t. 1'x = 1, x >= 0, with S = L L' diagonally dominant
+  // so that the unconstrained answer S^{-1} 1 / (1' S^{-1} 1) is positive (the bounds are inactive).
+  // Variance as t with the rotated cone 2 t (1/2) >= ||L' x||^2.
+  {
+    Eigen::MatrixXd S(4, 4);
+    S << 4, 1, 0.5, 0.2, 1, 3, 0.3, 0.1, 0.5, 0.3, 2, 0.4, 0.2, 0.1, 0.4, 5;
+    const Eigen::MatrixXd L = S.llt().matrixL();
+    const Eigen::VectorXd w = S.ldlt().solve(Eigen::VectorXd::Ones(4));
+    const double variance = 1.0 / w.sum();
+    Eigen::VectorXd expected(5);
+    expected << variance, w * variance;
+    examples.push_back({"portfolio_min_variance", [L] {
+                          ProblemBuilder b;
+                          b.AddVariables(5);  // t, x0..x3
+                          b.SetObjectiveCoefficient(0, 1.0);
+                          std::vector<Term> budget;
+                          for (int i = 0; i < 4; ++i) {
+                            budget.push_back({1 + i, 1.0});
+                            b.AddNonnegative(Var(1 + i));
+                          }
+                          b.AddEquality(budget, 1.0);
+                          std::vector<AffineExpr> rows = {Var(0), Const(0.5)};
+                          for (int j = 0; j < 4; ++j) {  // (L' x)_j = sum_i L(i, j) x_i
+                            AffineExpr e;
+                            for (int i = j; i < 4; ++i) e.terms.push_back({1 + i, L(i, j)});
+                            rows.push_back(e);
+                          }
+                          b.AddRotatedCone(rows);
+                          return b.Build();
+                        },
+                        variance, expected});
+  }
+  // Optimum at the apex of a cone: min t s.t. t >= ||(x, y)||, x + y >= 1... shifted: x + y = 0 and
+  // x >= 0, y >= 0 force x = y = 0, so t = 0 at the apex.
+  examples.push_back({"soc_apex", [] {
+                        ProblemBuilder b;
+                        b.AddVariables(3);
+                        b.SetObjectiveCoefficient(0, 1.0);
+                        b.AddEquality({{1, 1.0}, {2, 1.0}}, 0.0);
+                        b.AddNonnegative(Var(1));
+                        b.AddNonnegative(Var(2));
+                        b.AddSecondOrderCone({Var(0), Var(1), Var(2)});
+                        return b.Build();
+                      },
+                      0.0, Eigen::Vector3d::Zero()});
+  return examples;
+}
+
+struct ExampleCase {
+  Example example;
+  int sparse_cone_min_dimension;
+};
+
+class KnownOptimumTest : public ::testing::TestWithParam<ExampleCase> {};
+
+TEST_P(KnownOptimumTest, ReachesTheClosedFormOptimum) {
+  const ExampleCase& param = GetParam();
+  Solver::Options options;
+  options.sparse_cone_min_dimension = param.sparse_cone_min_dimension;
+  Solver solver(options);
+  const Problem problem = param.example.make();
+  const Result result = solver.Solve(problem);
+  ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
+  // The stopping rule bounds the duality gap and the residuals by 1e-8 (relative, or absolute below 1):
+  // the objective is then within ~1e-8 of the optimum; 1e-7 leaves a factor 10 for rounding.
+  const double scale = std::max(1.0, std::abs(param.example.optimal_value));
+  EXPECT_NEAR(result.primal_objective, param.example.optimal_value, 1e-7 * scale) << result.BriefReport();
+  EXPECT_NEAR(result.dual_objective, param.example.optimal_value, 1e-7 * scale) << result.BriefReport();
+  EXPECT_LE(result.primal_residual, 1e-8);
+  EXPECT_LE(result.dual_residual, 1e-8);
+  if (param.example.optimal_x.size() > 0) {
+    // These optima are unique and the problems well conditioned (strict complementarity), so x is
+    // Lipschitz in the gap: 1e-6 is a safe margin over the observed ~1e-9.
+    EXPECT_LT((result.x - param.example.optimal_x).lpNorm<Eigen::Infinity>(), 1e-6)
+        << result.x.transpose();
+  }
+  EXPECT_TRUE(result.x.allFinite() && result.y.allFinite() && result.z.allFinite() && result.s.allFinite());
+  EXPECT_LE(result.iterations, 30);
+}
+
+std::vector<ExampleCase> AllCases() {
+  std::vector<ExampleCase> cases;
+  for (const Example& e : Examples()) {
+    cases.push_back({e, 6});  // default: dense blocks for small cones, expansion for large ones
+    cases.push_back({e, 1});  // every cone by the sparse expansion
+  }
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Examples, KnownOptimumTest, ::testing::ValuesIn(AllCases()),
+                         [](const ::testing::TestParamInfo<ExampleCase>& info) {
+                           return info.param.example.name +
+                                  (info.param.sparse_cone_min_dimension == 1 ? "_expanded" : "_default");
+                         });
+
+// ------------------------------------------------------------------------------------------------
+// Infeasible and unbounded problems: the certificates are checked against their definitions.
+
+void ExpectInCone(const Eigen::VectorXd& v, const ConeSpec& cones, double tol) {
+  int r = 0;
+  for (; r < cones.num_nonnegative; ++r) EXPECT_GE(v[r], -tol);
+  for (int d : cones.soc_dims) {
+    EXPECT_GE(v[r] - v.segment(r + 1, d - 1).norm(), -tol);
+    r += d;
+  }
+  for (int d : cones.rotated_dims) {
+    EXPECT_GE(v[r], -tol);
+    EXPECT_GE(v[r + 1], -tol);
+    EXPECT_GE(2.0 * v[r] * v[r + 1] - v.segment(r + 2, d - 2).squaredNorm(), -tol);
+    r += d;
+  }
+}
+
+void ExpectPrimalInfeasibilityCertificate(const Problem& problem, const Result& result) {
+  ASSERT_EQ(result.status, Status::kPrimalInfeasible) << result.BriefReport();
+  // Normalization b'y + h'z = -1 is exact up to rounding.
+  EXPECT_NEAR(problem.b.dot(result.y) + problem.h.dot(result.z), -1.0, 1e-12);
+  // A'y + G'z = 0 to the infeasibility tolerance 1e-8 (data entries are O(1)).
+  const Eigen::VectorXd r = problem.A.transpose() * result.y + problem.G.transpose() * result.z;
+  EXPECT_LE(r.lpNorm<Eigen::Infinity>(), 1e-8);
+  ExpectInCone(result.z, problem.cones, 1e-12);  // iterates are strictly interior
+  EXPECT_TRUE(result.y.allFinite() && result.z.allFinite());
+}
+
+void ExpectDualInfeasibilityCertificate(const Problem& problem, const Result& result) {
+  ASSERT_EQ(result.status, Status::kDualInfeasible) << result.BriefReport();
+  EXPECT_NEAR(problem.c.dot(result.x), -1.0, 1e-12);
+  EXPECT_LE((problem.A * result.x).lpNorm<Eigen::Infinity>(), 1e-8);
+  EXPECT_LE((problem.G * result.x + result.s).lpNorm<Eigen::Infinity>(), 1e-8);
+  ExpectInCone(result.s, problem.cones, 1e-12);
+  EXPECT_TRUE(result.x.allFinite() && result.s.allFinite());
+}
+
+TEST(InfeasibilityTest, PrimalInfeasibleLp) {
+  ProblemBuilder b;
+  b.AddVariables(2);
+  b.SetObjectiveCoefficient(0, 1.0);
+  b.AddNonnegative(Var(0, 1.0, -1.0));  // x >= 1
+  b.AddLessEqual({{0, 1.0}}, 0.0);      // x <= 0
+  b.AddEquality({{1, 1.0}}, 2.0);
+  const Problem problem = b.Build();
+  Solver solver;
+  ExpectPrimalInfeasibilityCertificate(problem, solver.Solve(problem));
+}
+
+TEST(InfeasibilityTest, PrimalInfeasibleSocAndRotated) {
+  for (int min_dim : {6, 1}) {
+    ProblemBuilder b;
+    b.AddVariables(3);
+    b.SetObjectiveCoefficient(0, 1.0);
+    b.AddSecondOrderCone({Const(1.0), Var(0), Var(1)});  // ||(x, y)|| <= 1
+    b.AddNonnegative(Var(0, 1.0, -2.0));                  // x >= 2
+    b.AddRotatedCone({Var(2), Var(2), Const(1.0)});       // 2 w^2 >= 1, feasible by itself
+    const Problem problem = b.Build();
+    Solver::Options options;
+    options.sparse_cone_min_dimension = min_dim;
+    Solver solver(options);
+    ExpectPrimalInfeasibilityCertificate(problem, solver.Solve(problem));
+  }
+}
+
+TEST(InfeasibilityTest, DualInfeasibleLp) {
+  // min -x s.t. x >= 0, y = 1: unbounded along x.
+  ProblemBuilder b;
+  b.AddVariables(2);
+  b.SetObjectiveCoefficient(0, -1.0);
+  b.AddNonnegative(Var(0));
+  b.AddEquality({{1, 1.0}}, 1.0);
+  const Problem problem = b.Build();
+  Solver solver;
+  ExpectDualInfeasibilityCertificate(problem, solver.Solve(problem));
+}
+
+TEST(InfeasibilityTest, DualInfeasibleSoc) {
+  // min y - 0.5 t s.t. t >= ||y||: along t = -y -> infinity the objective falls like -1.5 t.
+  ProblemBuilder b;
+  b.AddVariables(2);  // t, y
+  b.SetObjectiveCoefficient(0, -0.5);
+  b.SetObjectiveCoefficient(1, 1.0);
+  b.AddSecondOrderCone({Var(0), Var(1)});
+  b.AddRotatedCone({Var(0), Const(1.0), Const(0.5)});  // 2 t >= 1/4
+  const Problem problem = b.Build();
+  Solver solver;
+  ExpectDualInfeasibilityCertificate(problem, solver.Solve(problem));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Degenerate problems end with a clear status and finite numbers.
+
+void ExpectFinite(const Result& result) {
+  EXPECT_TRUE(result.x.allFinite() && result.y.allFinite() && result.z.allFinite() && result.s.allFinite());
+  EXPECT_TRUE(std::isfinite(result.primal_objective) && std::isfinite(result.dual_objective));
+  EXPECT_NE(result.status, Status::kNotSolved);
+}
+
+TEST(DegenerateTest, RedundantEqualities) {
+  ProblemBuilder b;
+  b.AddVariables(3);
+  for (int i = 0; i < 3; ++i) {
+    b.SetObjectiveCoefficient(i, i + 1.0);
+    b.AddNonnegative(Var(i));
+  }
+  b.AddEquality({{0, 1.0}, {1, 1.0}, {2, 1.0}}, 1.0);
+  b.AddEquality({{0, 1.0}, {1, 1.0}, {2, 1.0}}, 1.0);  // duplicate
+  b.AddEquality({{0, 2.0}, {1, 2.0}, {2, 2.0}}, 2.0);  // multiple
+  Solver solver;
+  const Result result = solver.Solve(b.Build());
+  ExpectFinite(result);
+  ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
+  EXPECT_NEAR(result.primal_objective, 1.0, 1e-7);  // same answer as lp_simplex
+}
+
+TEST(DegenerateTest, AllZeroRows) {
+  ProblemBuilder b;
+  b.AddVariables(3);  // the last variable appears nowhere
+  b.SetObjectiveCoefficient(0, 1.0);
+  b.AddNonnegative(Var(0, 1.0, -2.0));   // x >= 2
+  b.AddNonnegative(Const(1.0));          // 1 >= 0: a zero row of G
+  b.AddEquality({}, 0.0);                // 0 = 0: a zero row of A
+  b.AddSecondOrderCone({Const(1.0), Const(0.0), Var(1)});
+  Solver solver;
+  const Result result = solver.Solve(b.Build());
+  ExpectFinite(result);
+  ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
+  EXPECT_NEAR(result.primal_objective, 2.0, 1e-7);
+}
+
+TEST(DegenerateTest, ConesWithoutInterior) {
+  // x >= 0 and x <= 0 (the orthant part has no interior), t >= ||(x, u)|| with t = 0 (the SOC has no
+  // interior), minimize y subject to y >= 1 + x. Optimum 1.
+  ProblemBuilder b;
+  b.AddVariables(4);  // x, y, t, u
+  b.SetObjectiveCoefficient(1, 1.0);
+  b.AddNonnegative(Var(0));
+  b.AddLessEqual({{0, 1.0}}, 0.0);
+  b.AddNonnegative(AffineExpr{{{1, 1.0}, {0, -1.0}}, -1.0});
+  b.AddEquality({{2, 1.0}}, 0.0);
+  b.AddSecondOrderCone({Var(2), Var(0), Var(3)});
+  Solver solver;
+  const Result result = solver.Solve(b.Build());
+  ExpectFinite(result);
+  // No interior means no strictly feasible point: the method still converges, but the achievable
+  // accuracy is about sqrt(tolerance), so only a clear status and a close objective are required.
+  EXPECT_TRUE(result.status == Status::kOptimal || result.status == Status::kNumericalError ||
+              result.status == Status::kIterationLimit)
+      << result.BriefReport();
+  EXPECT_NEAR(result.primal_objective, 1.0, 1e-4) << result.BriefReport();
+}
+
+TEST(DegenerateTest, EmptyProblemAndNoCones) {
+  // Only equalities: min x0 s.t. x0 + x1 = 1, x1 = 3 -> x0 = -2.
+  ProblemBuilder b;
+  b.AddVariables(2);
+  b.SetObjectiveCoefficient(0, 1.0);
+  b.AddEquality({{0, 1.0}, {1, 1.0}}, 1.0);
+  b.AddEquality({{1, 1.0}}, 3.0);
+  Solver solver;
+  const Result result = solver.Solve(b.Build());
+  ExpectFinite(result);
+  ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
+  EXPECT_NEAR(result.primal_objective, -2.0, 1e-7);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Bad input and options.
+
+TEST(BadInputTest, ThrowsBeforeAnyIteration) {
+  ProblemBuilder b;
+  b.AddVariables(2);
+  b.AddNonnegative(Var(0));
+  b.AddSecondOrderCone({Var(0), Var(1)});
+  Problem problem = b.Build();
+  int callbacks = 0;
+  Solver::Options options;
+  options.callback = [&](const IterationInfo&) { ++callbacks; };
+  Solver solver(options);
+
+  Problem bad = problem;
+  bad.cones.soc_dims = {3};
+  try {
+    solver.Solve(bad);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("G has 3 rows but the cones need 4"));
+  }
+  bad = problem;
+  bad.c[1] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    solver.Solve(bad);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("c has NaN at 1"));
+  }
+  EXPECT_EQ(callbacks, 0);
+  EXPECT_EQ(solver.Solve(problem).status, Status::kOptimal);  // the solver is still usable (c = 0)
+  EXPECT_GT(callbacks, 0);
+}
+
+TEST(BadInputTest, InvalidOptions) {
+  Solver::Options options;
+  std::string error;
+  EXPECT_TRUE(options.IsValid(&error));
+  options.step_fraction = 1.5;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_THAT(error, HasSubstr("step_fraction"));
+  EXPECT_THROW(Solver{options}, std::invalid_argument);
+  options = Solver::Options();
+  options.feasibility_tolerance = -1.0;
+  EXPECT_FALSE(options.IsValid(nullptr));
+}
+
+TEST(StatusTest, NamesAndReport) {
+  EXPECT_STREQ(ToString(Status::kOptimal), "optimal");
+  EXPECT_STREQ(ToString(Status::kPrimalInfeasible), "primal_infeasible");
+  EXPECT_STREQ(ToString(Status::kDualInfeasible), "dual_infeasible");
+  EXPECT_STREQ(ToString(Status::kIterationLimit), "iteration_limit");
+  EXPECT_STREQ(ToString(Status::kNumericalError), "numerical_error");
+  EXPECT_STREQ(ToString(Status::kNotSolved), "not_solved");
+  Result result;
+  EXPECT_FALSE(result.is_success());
+  EXPECT_THAT(result.BriefReport(), HasSubstr("not_solved"));
+}
+
+TEST(IterationLimitTest, StopsWithLastIterate) {
+  Solver::Options options;
+  options.max_iterations = 2;
+  Solver solver(options);
+  const Result result = solver.Solve(Examples()[0].make());
+  EXPECT_EQ(result.status, Status::kIterationLimit);
+  EXPECT_EQ(result.iterations, 2);
+  ExpectFinite(result);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Re-solving with the same pattern and new numbers.
+
+// A random sparse problem of fixed pattern whose numbers depend on `seed` (the pattern does not):
+// min c'x s.t. ||x - x0||_inf-box ... i.e. l <= x <= u, a few SOCs on pairs and one rotated cone.
+Problem PatternProblem(unsigned seed) {
+  std::srand(seed);
+  auto r = [] { return 0.5 + static_cast<double>(std::rand()) / RAND_MAX; };
+  const int n = 12;
+  ProblemBuilder b;
+  b.AddVariables(n + 1);
+  for (int i = 0; i < n; ++i) {
+    b.SetObjectiveCoefficient(i, r() - 1.0);
+    b.AddLessEqual({{i, r()}}, 2.0 * r());
+    b.AddNonnegative(AffineExpr{{{i, r()}}, 3.0 * r()});
+  }
+  b.AddEquality({{0, r()}, {3, r()}, {5, -r()}}, r());
+  for (int i = 0; i + 2 < n; i += 3) b.AddSecondOrderCone({Const(2.0 * r()), Var(i, r()), Var(i + 1, r())});
+  std::vector<AffineExpr> rows = {Var(n), Const(0.5)};
+  for (int i = 0; i < n; ++i) rows.push_back(Var(i, r()));
+  b.AddRotatedCone(rows);  // x_n >= ||D x||^2
+  b.SetObjectiveCoefficient(n, 0.1 * r());
+  return b.Build();
+}
+
+TEST(ResolveTest, SamePatternGivesTheSameAsAFreshSolver) {
+  Solver reused;
+  const Result first = reused.Solve(PatternProblem(1));
+  ASSERT_EQ(first.status, Status::kOptimal) << first.BriefReport();
+  EXPECT_FALSE(first.reused_symbolic);
+  const Problem second_problem = PatternProblem(2);
+  const Result second = reused.Solve(second_problem);
+  EXPECT_TRUE(second.reused_symbolic);
+  Solver fresh;
+  const Result reference = fresh.Solve(second_problem);
+  ASSERT_EQ(reference.status, Status::kOptimal) << reference.BriefReport();
+  EXPECT_EQ(second.status, reference.status);
+  EXPECT_EQ(second.iterations, reference.iterations);
+  // Same arithmetic in the same order: identical to the last bit, checked with a tiny margin.
+  EXPECT_LT((second.x - reference.x).lpNorm<Eigen::Infinity>(), 1e-14);
+  EXPECT_NEAR(second.primal_objective, reference.primal_objective, 1e-14);
+  EXPECT_NE(first.primal_objective, second.primal_objective);
+
+  // A different pattern triggers a new analysis.
+  const Result other = reused.Solve(Examples()[3].make());
+  EXPECT_FALSE(other.reused_symbolic);
+  EXPECT_EQ(other.status, Status::kOptimal);
+}
+
+}  // namespace
+}  // namespace timeopt::conic
