@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs missing Debian packages, builds timeopt in build/ and runs the main job on the shipped
-# default input, printing where the results went.
+# default: a minimum-jerk curve through examples/waypoints.csv, timed optimally by the SOCP,
+# written as samples and a plot of speed, velocity and acceleration against time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j2 --target timeopt_cli
-mkdir -p results
-./build/timeopt curve examples/waypoints.csv --kind minjerk -o results/curve.json
-echo "results: $(pwd)/results/curve.json"
+./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 \
+  --max-acceleration 2 -K 50 --out-dir results
+echo "results: $(pwd)/results"

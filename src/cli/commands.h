@@ -18,5 +18,7 @@ constexpr int kExitInfeasible = 3;
 using Runner = std::function<int()>;
 
 void RegisterCurveCommand(CLI::App& app, Runner& run);
+void RegisterTemporalCommand(CLI::App& app, Runner& run);
+void RegisterWaypointsCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

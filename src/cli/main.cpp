@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   Runner run;
   RegisterCurveCommand(app, run);
+  RegisterTemporalCommand(app, run);
+  RegisterWaypointsCommand(app, run);
 
   try {
     app.parse(argc, argv);

@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "timeopt/io/curve_io.h"
+#include "timeopt/io/errors.h"
 
 namespace timeopt {
 namespace {
@@ -94,6 +95,56 @@ TEST_F(CliTest, BadInputExitsWithTwoAndOneLine) {
 
   r = RunCli("");
   EXPECT_EQ(r.exit_code, 2);
+}
+
+}  // namespace
+}  // namespace timeopt
+
+namespace timeopt {
+namespace {
+
+TEST_F(CliTest, TemporalSolvesTheContractExample) {
+  for (const std::string solver : {"socp", "ipopt"}) {
+    const CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) +
+                            "/examples/line_problem.json --solver " + solver + " --output " +
+                            Path("r.json") + " --samples " + Path("s.csv") + " --rate 10 --plot " +
+                            Path("p.png"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::string json = ReadTextFile(Path("r.json"));
+    EXPECT_THAT(json, HasSubstr("\"status\": \"optimal\""));
+    EXPECT_THAT(json, HasSubstr("\"solver\": \"" + solver + "\""));
+    EXPECT_THAT(json, HasSubstr("\"total_time\": 7.0")) << json;  // closed form L/v + v/a = 7
+    const std::string csv = ReadTextFile(Path("s.csv"));
+    EXPECT_EQ(csv.rfind("t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz\n", 0), 0u);
+    // 7 s at 10 Hz: t = 0.0 .. 6.9 plus the final state at 7.0.
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 71);
+    EXPECT_GT(std::filesystem::file_size(Path("p.png")), 1000u);
+  }
+}
+
+TEST_F(CliTest, TemporalExitCodes) {
+  Write("fast.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0},
+    "boundary": {"start_velocity": [5, 0, 0]}, "discretization": {"K": 10}})");
+  CliRun r = RunCli("temporal " + Path("fast.json") + " -o " + Path("r.json"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_THAT(ReadTextFile(Path("r.json")), HasSubstr("\"status\": \"infeasible\""));
+
+  Write("bad.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": -2.0, "max_acceleration": 1.0}})");
+  r = RunCli("temporal " + Path("bad.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("limits.max_velocity"));
+
+  Write("typo.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0}, "rhoo": 1})");
+  r = RunCli("temporal " + Path("typo.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("rhoo: unknown key"));
+
+  r = RunCli("temporal " + Path("nothing.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("nothing.json"));
 }
 
 }  // namespace

@@ -1,0 +1,37 @@
+#pragma once
+
+// Temporal problem and result files (the contract of DESIGN.md), and trajectory sample CSVs.
+//
+// Problem JSON:
+//   {"curve": {...curve contract, optional "durations"...},
+//    "limits": {"max_velocity": 2.0 | [vx, vy, vz], "max_acceleration": 1.0 | [ax, ay, az],
+//               "max_acceleration_change": 0.5},               (optional)
+//    "boundary": {"start_velocity": [..], "start_acceleration": [..],
+//                 "end_velocity": [..], "end_acceleration": [..]},   (optional: rest to rest)
+//    "discretization": {"K": 50}, "rho": 0.0, "constraint_mode": "paper" | "certified"}
+// Unknown keys are rejected so that a typo does not silently fall back to a default.
+// Errors: std::invalid_argument naming the field; timeopt::FileError for unreadable files.
+
+#include <string>
+#include <vector>
+
+#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/temporal/temporal_solver.h"
+#include "timeopt/trajectory/trajectory.h"
+
+namespace timeopt {
+
+TemporalProblem ParseTemporalProblemJson(const std::string& json_text,
+                                         const std::string& context = "problem");
+TemporalProblem ReadTemporalProblemJson(const std::string& path);
+
+// {"status", "solver", "total_time", "objective", "piece_durations", "iterations",
+//  "solve_time_ms", "build_time_ms", "message", "max_velocity_ratio", "max_acceleration_ratio",
+//  "joints": [{"joint", "type", "speed_ratio", "angle"}]}. Numbers that are not meaningful for a
+// non-optimal status are null.
+std::string TemporalResultToJson(const TemporalResult& result, int indent = 2);
+
+// Header t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz then one row per state, full precision.
+std::string SamplesToCsv(const std::vector<TrajectoryState>& samples);
+
+}  // namespace timeopt

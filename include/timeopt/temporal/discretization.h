@@ -1,0 +1,90 @@
+#pragma once
+
+// The discretized temporal problem shared by every backend, so that the SOCP and the NLP solve
+// exactly the same problem.
+//
+// Grid: piece i has grid points s_k = k ds, k = 0..K, ds = 1/K, and cells [s_k, s_{k+1}].
+// Unknown: b at every grid point (b = sdot^2). Within a cell b is linear in s and a = sddot is
+// constant: a = (b^{k+1} - b^k) / (2 ds) (eq. 26). The traversal time of a cell is then exactly
+// 2 ds / (sqrt(b^k) + sqrt(b^{k+1})) and
+//   J = sum over cells [ 2 ds / (sqrt(b^k) + sqrt(b^{k+1})) + rho a^2 ds ]      (eqs. 27-28)
+//
+// Presolve: each grid value is either fixed (a boundary velocity, a stop at a kink) or
+// b_g = scale_g * x[var_g] with x the free unknowns. Joints (eq. 42): when the tangents at a
+// joint are parallel and non-zero the first point of the next piece shares the variable of the
+// last point of the previous piece with scale multiplied by (|f'_i(1)| / |f'_{i+1}(0)|)^2 (exactly
+// eq. 43 when the ratio is 1); at a kink or a vanishing tangent both are fixed at 0. Rows are then
+// written over x only: lower <= sum coef * x <= upper.
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "timeopt/temporal/temporal_problem.h"
+
+namespace timeopt {
+
+enum class JointType {
+  kC1,    // tangents equal: b continuous (eq. 43)
+  kG1,    // tangents parallel, lengths differ: b scaled by the squared length ratio (eq. 42)
+  kStop,  // tangents turn or vanish: the vehicle stops, b = 0 on both sides
+};
+
+const char* ToString(JointType type);
+
+struct JointInfo {
+  int joint = 0;             // between piece `joint` and `joint + 1`
+  JointType type = JointType::kC1;
+  double speed_ratio = 1.0;  // |f'_i(1)| / |f'_{i+1}(0)| (1 for C1; 0 for a vanishing tangent)
+  double angle = 0.0;        // angle between the tangents, radians
+};
+
+// One grid value b_g: fixed, or scale * x[var].
+struct GridValue {
+  int var = -1;        // index into x, or -1 when fixed
+  double scale = 1.0;  // b = scale * x[var]
+  double fixed = 0.0;  // b when var < 0
+};
+
+struct LinearRow {
+  enum class Kind { kVelocity, kAcceleration, kAccelerationChange, kBoundaryAcceleration };
+  Kind kind = Kind::kAcceleration;
+  std::vector<std::pair<int, double>> terms;  // (var, coef), distinct vars
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
+};
+
+struct Cell {
+  int piece = 0;
+  int first_grid = 0;  // grid index of b^k; b^{k+1} is first_grid + 1
+  double ds = 0.0;
+};
+
+struct TemporalDiscretization {
+  int num_pieces = 0;
+  int cells_per_piece = 0;
+  double rho = 0.0;
+  int num_vars = 0;                        // size of x
+  std::vector<GridValue> grid;             // m (K + 1) values; piece i, point k at i (K + 1) + k
+  std::vector<Cell> cells;                 // m K cells in path order
+  std::vector<double> var_upper;           // upper bound of each x (>= 0, may be +inf); x >= 0
+  std::vector<LinearRow> rows;             // over x, constants folded into the bounds
+  std::vector<JointInfo> joints;           // m - 1 entries
+  // Set when presolve already proves the problem infeasible (e.g. a boundary speed above the
+  // limit); the backends then report infeasible with this message without solving.
+  std::optional<std::string> infeasible_reason;
+
+  int GridIndex(int piece, int k) const { return piece * (cells_per_piece + 1) + k; }
+  // b at grid point g for the given x.
+  double GridB(int g, const std::vector<double>& x) const;
+  // Objective J and its time part T for x (infinite when a cell has b = 0 at both ends).
+  double Objective(const std::vector<double>& x, double* total_time = nullptr) const;
+  // Largest violation of the rows and bounds for x (0 when feasible), in the rows' units.
+  double MaxViolation(const std::vector<double>& x) const;
+};
+
+// Validates the problem (throws std::invalid_argument) and builds the discretization.
+TemporalDiscretization Discretize(const TemporalProblem& problem);
+
+}  // namespace timeopt

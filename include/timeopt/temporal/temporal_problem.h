@@ -1,0 +1,76 @@
+#pragma once
+
+// The minimum-time temporal problem of Gao et al. (IROS 2018, Sect. IV): for a fixed spatial curve
+// f(s) made of m unit pieces, find the mapping s(t) that traverses it in minimum time subject to
+// per-axis velocity and acceleration limits.
+//
+// With b(s) = sdot^2 and a(s) = sddot, velocity and acceleration along the curve are
+//   v(s) = f'(s) sqrt(b(s)),   acc(s) = f'(s) a(s) + f''(s) b(s),   b'(s) = 2 a(s),
+// and the traversal time is T = integral ds / sqrt(b(s)). The discretization (K cells per piece,
+// b at grid points, a constant per cell) is described in discretization.h and in DESIGN.md.
+// SI units: metres, seconds.
+
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "timeopt/curve/piecewise_curve.h"
+
+namespace timeopt {
+
+struct TemporalLimits {
+  // Per-axis velocity limit |v_axis| <= max_velocity(axis), m/s; each > 0 and finite.
+  Eigen::Vector3d max_velocity = Eigen::Vector3d::Constant(2.0);
+  // Per-axis acceleration limit |acc_axis| <= max_acceleration(axis), m/s^2; each > 0 and finite.
+  Eigen::Vector3d max_acceleration = Eigen::Vector3d::Constant(1.0);
+  // Optional bound lambda_a on the change of each axis' acceleration between consecutive cells
+  // (paper eqs. 44-45) and against the boundary accelerations (eqs. 48-49), m/s^2 per cell.
+  // Absent: none of these rows exist.
+  std::optional<double> max_acceleration_change;
+};
+
+// Velocity and acceleration at both ends. A velocity must be parallel to the curve's tangent
+// there (eqs. 46-47). Accelerations only enter through max_acceleration_change.
+struct TemporalBoundary {
+  Eigen::Vector3d start_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d start_acceleration = Eigen::Vector3d::Zero();
+  Eigen::Vector3d end_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d end_acceleration = Eigen::Vector3d::Zero();
+};
+
+enum class ConstraintMode {
+  // Exactly the paper: velocity at grid points (eq. 41), acceleration at cell middles (eq. 40).
+  kPaper,
+  // Rows that hold on the whole cell: every Bernstein coefficient of f'^2 b and of f' a + f'' b
+  // on the cell is within the limits (convex hull property), so the continuous trajectory is.
+  kCertified,
+};
+
+const char* ToString(ConstraintMode mode);
+
+struct TemporalProblem {
+  PiecewiseCurve curve;  // unit pieces, s in [0, 1] each
+  TemporalLimits limits;
+  TemporalBoundary boundary;
+  // Cells per piece (K >= 1); ds = 1 / K. The paper suggests 30-50.
+  int cells_per_piece = 50;
+  // Weight of the acceleration regularization rho * sum a^2 ds (eq. 27), s^2 / m-free (the
+  // objective is in seconds plus rho times (1/s^2)^2 units); >= 0.
+  double rho = 0.0;
+  ConstraintMode constraint_mode = ConstraintMode::kPaper;
+  // Tangents at a joint whose angle is below this (radians) are treated as parallel (G1 joint:
+  // speed continuous); a larger angle is a kink where the vehicle stops. Also the tolerance on a
+  // boundary velocity's angle to the tangent. 1e-6 rad: curves fitted in double precision are
+  // parallel to ~1e-12, real corners are far above.
+  double parallel_tolerance = 1e-6;
+  // A tangent shorter than this (m per unit s) counts as vanishing: the vehicle stops there.
+  // 1e-9: far below any tangent of a curve that moves a millimetre per piece.
+  double zero_tangent_tolerance = 1e-9;
+
+  // Throws std::invalid_argument naming the offending field ("limits.max_velocity[1]: expected a
+  // positive finite number, got -1").
+  void Validate() const;
+};
+
+}  // namespace timeopt

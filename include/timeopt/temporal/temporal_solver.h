@@ -1,0 +1,90 @@
+#pragma once
+
+// Solvers of the temporal problem: the paper's SOCP with our own conic solver, and the same
+// problem as an Ipopt NLP for comparison. Both solve the TemporalDiscretization built from the
+// problem, so they agree up to their tolerances.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "timeopt/temporal/discretization.h"
+#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/temporal/temporal_profile.h"
+
+namespace timeopt {
+
+enum class TemporalStatus {
+  kOptimal,         // profile, total_time and piece_durations are usable
+  kInfeasible,      // no time allocation satisfies the limits; message says why when known
+  kIterationLimit,  // the solver stopped first; nothing is usable
+  kNumericalError,  // the solver failed numerically; nothing is usable
+  kInvalidInput,    // the problem is malformed; message names the field
+};
+
+// "optimal", "infeasible", "iteration_limit", "numerical_error", "invalid_input".
+const char* ToString(TemporalStatus status);
+
+enum class TemporalBackend { kSocp, kIpopt };
+const char* ToString(TemporalBackend backend);  // "socp", "ipopt"
+
+struct TemporalResult {
+  TemporalStatus status = TemporalStatus::kNumericalError;
+  std::string message;
+  std::string solver;            // "socp" or "ipopt"
+  double total_time = 0.0;       // T, seconds
+  double objective = 0.0;        // J = T + rho sum a^2 ds
+  std::vector<double> piece_durations;  // seconds
+  int iterations = 0;
+  double solve_time_seconds = 0.0;  // solver only (building excluded)
+  double build_time_seconds = 0.0;  // discretization and problem assembly
+  TemporalProfile profile;          // set when optimal
+  std::vector<JointInfo> joints;    // joint types found (C1, G1 with ratio, stop)
+  // Dense check of the exact trajectory (not only the grid): the largest |v_axis| / vmax_axis and
+  // |acc_axis| / amax_axis over all axes and a fine sampling of every cell. Set when optimal.
+  double max_velocity_ratio = 0.0;
+  double max_acceleration_ratio = 0.0;
+
+  bool is_success() const { return status == TemporalStatus::kOptimal; }
+};
+
+class TemporalSolver {
+ public:
+  virtual ~TemporalSolver() = default;
+  // Never throws for bad problems: they come back as kInvalidInput with a message.
+  virtual TemporalResult Solve(const TemporalProblem& problem) = 0;
+  virtual TemporalBackend backend() const = 0;
+};
+
+// Options of the SOCP backend.
+struct SocpTemporalOptions {
+  // Relative feasibility and gap tolerance of the interior-point solver. 1e-9: T to ~1e-9 relative.
+  double tolerance = 1e-9;
+  // Interior-point iteration limit. 100 (the temporal problem needs 15-30).
+  int max_iterations = 100;
+};
+
+// Options of the Ipopt backend.
+struct IpoptTemporalOptions {
+  // Ipopt's `tol` (scaled NLP error). 1e-10 so that T agrees with the SOCP to ~1e-9 relative.
+  double tolerance = 1e-10;
+  // Ipopt's `max_iter`. 3000.
+  int max_iterations = 3000;
+};
+
+std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options = {});
+std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options = {});
+std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);
+
+// Shared by the backends: fills total_time, objective, piece_durations, profile and the dense
+// feasibility ratios of an optimal result from the discretization's free values x.
+void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
+                         const std::vector<double>& x, TemporalResult* result);
+
+// The dense feasibility check: largest |v_axis|/vmax_axis and |acc_axis|/amax_axis along the
+// exact trajectory, sampling every cell at `samples_per_cell` + 1 evenly spaced values of s.
+void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
+                      int samples_per_cell, double* max_velocity_ratio,
+                      double* max_acceleration_ratio);
+
+}  // namespace timeopt

@@ -1,0 +1,43 @@
+#pragma once
+
+// A time-parameterized trajectory p(t) = f(s(t)): the spatial curve composed with the temporal
+// profile. Within a cell sdot is linear in t and sdddot = 0, so
+//   v = f' sdot,   acc = f'' sdot^2 + f' sddot,   jerk = f''' sdot^3 + 3 f'' sdot sddot.
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "timeopt/curve/piecewise_curve.h"
+#include "timeopt/temporal/temporal_profile.h"
+
+namespace timeopt {
+
+struct TrajectoryState {
+  double t = 0.0;  // s
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();      // m
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s
+  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  // m/s^2
+  Eigen::Vector3d jerk = Eigen::Vector3d::Zero();          // m/s^3
+};
+
+class Trajectory {
+ public:
+  // Throws std::invalid_argument when the profile's piece count differs from the curve's.
+  Trajectory(PiecewiseCurve curve, TemporalProfile profile);
+
+  double duration() const { return profile_.total_time(); }
+  const PiecewiseCurve& curve() const { return curve_; }
+  const TemporalProfile& profile() const { return profile_; }
+
+  // State at time t, clamped to [0, duration()].
+  TrajectoryState Evaluate(double t) const;
+  // States at t = 0, 1/rate, 2/rate, ... and at t = duration(). rate_hz > 0 (throws otherwise).
+  std::vector<TrajectoryState> Sample(double rate_hz) const;
+
+ private:
+  PiecewiseCurve curve_;
+  TemporalProfile profile_;
+};
+
+}  // namespace timeopt

@@ -1,0 +1,178 @@
+// `timeopt temporal PROBLEM.json [--solver socp|ipopt] [--output RESULT.json]
+//                   [--samples TRAJ.csv --rate HZ] [--plot PLOT.png]`
+// `timeopt waypoints WAYPOINTS.csv [--kind cubic|minjerk] [--max-velocity V] [--max-acceleration A]
+//                   [-K K] [--rho RHO] [--solver socp|ipopt] --out-dir DIR`
+
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "commands.h"
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/io/curve_io.h"
+#include "timeopt/io/profile_plot.h"
+#include "timeopt/io/temporal_io.h"
+#include "timeopt/temporal/temporal_solver.h"
+#include "timeopt/trajectory/trajectory.h"
+
+namespace timeopt::cli {
+namespace {
+
+int ExitCodeFor(TemporalStatus status) {
+  switch (status) {
+    case TemporalStatus::kOptimal: return kExitOk;
+    case TemporalStatus::kInfeasible: return kExitInfeasible;
+    case TemporalStatus::kInvalidInput: return kExitInvalidInput;
+    default: return kExitFailure;
+  }
+}
+
+TemporalBackend ParseBackend(const std::string& name) {
+  return name == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp;
+}
+
+struct TemporalArgs {
+  std::string problem;
+  std::string solver = "socp";
+  std::string output;
+  std::string samples;
+  double rate = 100.0;
+  std::string plot;
+};
+
+// Solves, writes the requested outputs and returns the exit code.
+int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
+                  const std::string& output, const std::string& samples, double rate,
+                  const std::string& plot) {
+  const auto solver = MakeTemporalSolver(ParseBackend(solver_name));
+  const TemporalResult result = solver->Solve(problem);
+  const std::string json = TemporalResultToJson(result);
+  if (output.empty()) std::cout << json;
+  else WriteTextFile(output, json);
+  if (!result.is_success()) {
+    std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
+    return ExitCodeFor(result.status);
+  }
+  const Trajectory trajectory(problem.curve, result.profile);
+  if (!samples.empty()) WriteTextFile(samples, SamplesToCsv(trajectory.Sample(rate)));
+  if (!plot.empty()) WriteProfilePlotPng(trajectory, problem.limits, plot);
+  return kExitOk;
+}
+
+int RunTemporal(const TemporalArgs& args) {
+  const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+  return SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
+}
+
+struct WaypointsArgs {
+  std::string waypoints;
+  std::string kind = "minjerk";
+  double max_velocity = 2.0;
+  double max_acceleration = 2.0;
+  int K = 50;
+  double rho = 0.0;
+  std::string solver = "socp";
+  std::string constraint_mode = "paper";
+  std::string out_dir = "results";
+  double rate = 100.0;
+};
+
+int RunWaypoints(const WaypointsArgs& args) {
+  const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
+  TemporalProblem problem;
+  problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
+  problem.limits.max_velocity = Eigen::Vector3d::Constant(args.max_velocity);
+  problem.limits.max_acceleration = Eigen::Vector3d::Constant(args.max_acceleration);
+  problem.cells_per_piece = args.K;
+  problem.rho = args.rho;
+  problem.constraint_mode =
+      args.constraint_mode == "certified" ? ConstraintMode::kCertified : ConstraintMode::kPaper;
+  problem.Validate();
+
+  std::error_code ec;
+  std::filesystem::create_directories(args.out_dir, ec);
+  if (ec) throw FileError("cannot create directory '" + args.out_dir + "': " + ec.message());
+  const std::filesystem::path dir(args.out_dir);
+  WriteCurveJson(problem.curve, (dir / "curve.json").string());
+
+  const auto solver = MakeTemporalSolver(ParseBackend(args.solver));
+  const TemporalResult result = solver->Solve(problem);
+  WriteTextFile((dir / "result.json").string(), TemporalResultToJson(result));
+  if (!result.is_success()) {
+    std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
+    return ExitCodeFor(result.status);
+  }
+  const Trajectory trajectory(problem.curve, result.profile);
+  WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
+  WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
+
+  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
+            << " curve, " << problem.curve.num_pieces() << " pieces, length "
+            << problem.curve.ArcLength(1e-9) << " m)\n"
+            << "limits: max_velocity " << args.max_velocity << " m/s, max_acceleration "
+            << args.max_acceleration << " m/s^2, K " << args.K << ", rho " << args.rho << ", "
+            << args.constraint_mode << " constraints\n"
+            << "solver: " << result.solver << ", " << result.iterations << " iterations, "
+            << result.solve_time_seconds * 1e3 << " ms\n"
+            << "total_time: " << result.total_time << " s\n"
+            << "max |v|/vmax along the trajectory: " << result.max_velocity_ratio
+            << ", max |a|/amax: " << result.max_acceleration_ratio << "\n"
+            << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
+            << ", " << (dir / "samples.csv").string() << ", " << (dir / "profile.png").string()
+            << "\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterTemporalCommand(CLI::App& app, Runner& run) {
+  auto args = std::make_shared<TemporalArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "temporal", "Minimum-time temporal profile along a given curve (problem JSON of DESIGN.md)");
+  sub->add_option("PROBLEM", args->problem, "Problem JSON file")->required();
+  sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
+      ->check(CLI::IsMember({"socp", "ipopt"}))
+      ->capture_default_str();
+  sub->add_option("-o,--output", args->output, "Result JSON file (default: stdout)");
+  sub->add_option("--samples", args->samples,
+                  "Trajectory samples CSV (t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz)");
+  sub->add_option("--rate", args->rate, "Sample rate for --samples, Hz")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
+  sub->callback([args, &run] { run = [args] { return RunTemporal(*args); }; });
+}
+
+void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
+  auto args = std::make_shared<WaypointsArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "waypoints", "Fit a curve through waypoints, time it optimally, write samples and a plot");
+  sub->add_option("WAYPOINTS", args->waypoints, "Waypoint CSV file (x,y,z rows)")->required();
+  sub->add_option("--kind", args->kind, "cubic or minjerk (rest to rest)")
+      ->check(CLI::IsMember({"cubic", "minjerk"}))
+      ->capture_default_str();
+  sub->add_option("--max-velocity", args->max_velocity, "Per-axis velocity limit, m/s")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--max-acceleration", args->max_acceleration, "Per-axis acceleration limit, m/s^2")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("-K,--cells", args->K, "Cells per piece")->check(CLI::Range(1, 100000))->capture_default_str();
+  sub->add_option("--rho", args->rho, "Acceleration regularization weight")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--solver", args->solver, "socp or ipopt")
+      ->check(CLI::IsMember({"socp", "ipopt"}))
+      ->capture_default_str();
+  sub->add_option("--constraint-mode", args->constraint_mode, "paper or certified")
+      ->check(CLI::IsMember({"paper", "certified"}))
+      ->capture_default_str();
+  sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
+  sub->callback([args, &run] { run = [args] { return RunWaypoints(*args); }; });
+}
+
+}  // namespace timeopt::cli

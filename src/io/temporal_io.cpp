@@ -1,0 +1,159 @@
+#include "timeopt/io/temporal_io.h"
+
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "curve_json_internal.h"
+
+namespace timeopt {
+namespace {
+
+using nlohmann::json;
+
+void RejectUnknownKeys(const json& j, const std::set<std::string>& known, const std::string& where) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (!known.count(it.key())) {
+      throw std::invalid_argument(where + (where.empty() ? "" : ".") + it.key() +
+                                  ": unknown key");
+    }
+  }
+}
+
+// A scalar (same on every axis) or an array of 3.
+Eigen::Vector3d PerAxis(const json& j, const std::string& field) {
+  if (j.is_number()) return Eigen::Vector3d::Constant(internal::FiniteNumber(j, field));
+  const std::vector<double> v = internal::FiniteArray(j, field, 3);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+Eigen::Vector3d Vector3(const json& j, const std::string& field) {
+  const std::vector<double> v = internal::FiniteArray(j, field, 3);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+const json& Require(const json& j, const std::string& key, const std::string& where) {
+  if (!j.contains(key)) throw std::invalid_argument(where + key + ": missing");
+  return j.at(key);
+}
+
+}  // namespace
+
+TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std::string& context) {
+  const json j = internal::ParseJsonText(json_text, context);
+  if (!j.is_object()) throw std::invalid_argument(context + ": expected a JSON object");
+  RejectUnknownKeys(j, {"curve", "limits", "boundary", "discretization", "rho", "constraint_mode"},
+                    "");
+  TemporalProblem p;
+  p.curve = internal::CurveFromJson(Require(j, "curve", ""), "curve").curve;
+
+  const json& limits = Require(j, "limits", "");
+  if (!limits.is_object()) throw std::invalid_argument("limits: expected an object");
+  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change"},
+                    "limits");
+  p.limits.max_velocity = PerAxis(Require(limits, "max_velocity", "limits."), "limits.max_velocity");
+  p.limits.max_acceleration =
+      PerAxis(Require(limits, "max_acceleration", "limits."), "limits.max_acceleration");
+  if (limits.contains("max_acceleration_change") && !limits.at("max_acceleration_change").is_null()) {
+    p.limits.max_acceleration_change = internal::FiniteNumber(
+        limits.at("max_acceleration_change"), "limits.max_acceleration_change");
+  }
+
+  if (j.contains("boundary")) {
+    const json& b = j.at("boundary");
+    if (!b.is_object()) throw std::invalid_argument("boundary: expected an object");
+    RejectUnknownKeys(b, {"start_velocity", "start_acceleration", "end_velocity", "end_acceleration"},
+                      "boundary");
+    if (b.contains("start_velocity")) p.boundary.start_velocity = Vector3(b.at("start_velocity"), "boundary.start_velocity");
+    if (b.contains("start_acceleration")) p.boundary.start_acceleration = Vector3(b.at("start_acceleration"), "boundary.start_acceleration");
+    if (b.contains("end_velocity")) p.boundary.end_velocity = Vector3(b.at("end_velocity"), "boundary.end_velocity");
+    if (b.contains("end_acceleration")) p.boundary.end_acceleration = Vector3(b.at("end_acceleration"), "boundary.end_acceleration");
+  }
+
+  if (j.contains("discretization")) {
+    const json& d = j.at("discretization");
+    if (!d.is_object()) throw std::invalid_argument("discretization: expected an object");
+    RejectUnknownKeys(d, {"K"}, "discretization");
+    if (d.contains("K")) {
+      const json& k = d.at("K");
+      if (!k.is_number_integer()) {
+        throw std::invalid_argument("discretization.K: expected an integer, got " +
+                                    std::string(k.type_name()));
+      }
+      const long long value = k.get<long long>();
+      if (value < 1 || value > 100000) {
+        throw std::invalid_argument("discretization.K: expected 1..100000, got " +
+                                    std::to_string(value));
+      }
+      p.cells_per_piece = static_cast<int>(value);
+    }
+  }
+  if (j.contains("rho")) p.rho = internal::FiniteNumber(j.at("rho"), "rho");
+  if (j.contains("constraint_mode")) {
+    const json& mode = j.at("constraint_mode");
+    if (mode == "paper") {
+      p.constraint_mode = ConstraintMode::kPaper;
+    } else if (mode == "certified") {
+      p.constraint_mode = ConstraintMode::kCertified;
+    } else {
+      throw std::invalid_argument("constraint_mode: expected \"paper\" or \"certified\", got " +
+                                  mode.dump());
+    }
+  }
+  p.Validate();
+  return p;
+}
+
+TemporalProblem ReadTemporalProblemJson(const std::string& path) {
+  try {
+    return ParseTemporalProblemJson(ReadTextFile(path));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+}
+
+std::string TemporalResultToJson(const TemporalResult& r, int indent) {
+  json j;
+  const bool ok = r.is_success();
+  j["status"] = ToString(r.status);
+  j["solver"] = r.solver;
+  j["total_time"] = ok ? json(r.total_time) : json(nullptr);
+  j["objective"] = ok ? json(r.objective) : json(nullptr);
+  j["piece_durations"] = ok ? json(r.piece_durations) : json::array();
+  j["iterations"] = r.iterations;
+  j["solve_time_ms"] = r.solve_time_seconds * 1e3;
+  j["build_time_ms"] = r.build_time_seconds * 1e3;
+  j["message"] = r.message;
+  j["max_velocity_ratio"] = ok ? json(r.max_velocity_ratio) : json(nullptr);
+  j["max_acceleration_ratio"] = ok ? json(r.max_acceleration_ratio) : json(nullptr);
+  json joints = json::array();
+  for (const JointInfo& ji : r.joints) {
+    joints.push_back({{"joint", ji.joint}, {"type", ToString(ji.type)},
+                      {"speed_ratio", ji.speed_ratio}, {"angle", ji.angle}});
+  }
+  j["joints"] = joints;
+  return j.dump(indent) + "\n";
+}
+
+std::string SamplesToCsv(const std::vector<TrajectoryState>& samples) {
+  std::string out = "t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz\n";
+  out.reserve(out.size() + samples.size() * 13 * 24);
+  char buffer[32];
+  for (const TrajectoryState& s : samples) {
+    const double values[13] = {s.t,
+                               s.position.x(), s.position.y(), s.position.z(),
+                               s.velocity.x(), s.velocity.y(), s.velocity.z(),
+                               s.acceleration.x(), s.acceleration.y(), s.acceleration.z(),
+                               s.jerk.x(), s.jerk.y(), s.jerk.z()};
+    for (int i = 0; i < 13; ++i) {
+      std::snprintf(buffer, sizeof(buffer), "%.17g", values[i]);
+      out += buffer;
+      out += i == 12 ? '\n' : ',';
+    }
+  }
+  return out;
+}
+
+}  // namespace timeopt

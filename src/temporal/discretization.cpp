@@ -1,0 +1,397 @@
+#include "timeopt/temporal/discretization.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "timeopt/curve/bernstein.h"
+
+namespace timeopt {
+
+const char* ToString(JointType type) {
+  switch (type) {
+    case JointType::kC1: return "C1";
+    case JointType::kG1: return "G1";
+    case JointType::kStop: return "stop";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+// Relative slack for checking rows made only of constants (fixed grid values): rounding in
+// |v|^2 / |f'|^2 and back is ~1e-15; 1e-9 keeps "exactly at the limit" feasible.
+constexpr double kConstantRowSlack = 1e-9;
+
+double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// Coefficients (ascending, in u in [0, 1]) of p(s0 + h u) for the polynomial with ascending
+// coefficients `c` in s.
+Eigen::VectorXd Shifted(const Eigen::VectorXd& c, double s0, double h) {
+  const int n = static_cast<int>(c.size());
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
+  // Taylor expansion at s0: out_j = p^(j)(s0) h^j / j!.
+  Eigen::VectorXd d = c;  // coefficients of the current derivative divided by j!
+  double hj = 1.0;
+  for (int j = 0; j < n; ++j) {
+    double v = 0.0;
+    for (int k = static_cast<int>(d.size()) - 1; k >= 0; --k) v = v * s0 + d(k);
+    out(j) = v * hj;
+    // next: derivative / (j + 1)
+    Eigen::VectorXd next = Eigen::VectorXd::Zero(std::max<Eigen::Index>(1, d.size() - 1));
+    for (int k = 1; k < d.size(); ++k) next(k - 1) = d(k) * k / static_cast<double>(j + 1);
+    d = next;
+    hj *= h;
+  }
+  return out;
+}
+
+Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (int i = 0; i < a.size(); ++i) {
+    for (int j = 0; j < b.size(); ++j) out(i + j) += a(i) * b(j);
+  }
+  return out;
+}
+
+Eigen::VectorXd Padded(const Eigen::VectorXd& a, int size) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(std::max<int>(size, static_cast<int>(a.size())));
+  out.head(a.size()) = a;
+  return out;
+}
+
+class RowBuilder {
+ public:
+  explicit RowBuilder(TemporalDiscretization& d) : d_(d) {}
+
+  // Adds coef * b_g to the current row.
+  void Add(int g, double coef) {
+    const GridValue& v = d_.grid[static_cast<size_t>(g)];
+    if (v.var < 0) {
+      constant_ += coef * v.fixed;
+      return;
+    }
+    for (auto& t : terms_) {
+      if (t.first == v.var) {
+        t.second += coef * v.scale;
+        return;
+      }
+    }
+    terms_.emplace_back(v.var, coef * v.scale);
+  }
+
+  // Finishes the row lower <= expression <= upper; `what` names it for presolve messages.
+  void Finish(LinearRow::Kind kind, double lower, double upper, const std::string& what) {
+    std::vector<std::pair<int, double>> kept;
+    for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
+    if (kept.empty()) {
+      const double scale = std::max({1.0, std::abs(lower), std::abs(upper)});
+      if ((std::isfinite(lower) && constant_ < lower - kConstantRowSlack * scale) ||
+          (std::isfinite(upper) && constant_ > upper + kConstantRowSlack * scale)) {
+        if (!d_.infeasible_reason) {
+          std::ostringstream ss;
+          ss << what << " is " << constant_ << ", outside [" << lower << ", " << upper
+             << "] whatever the time allocation";
+          d_.infeasible_reason = ss.str();
+        }
+      }
+    } else {
+      LinearRow row;
+      row.kind = kind;
+      row.terms = std::move(kept);
+      row.lower = lower - constant_;
+      row.upper = upper - constant_;
+      d_.rows.push_back(std::move(row));
+    }
+    terms_.clear();
+    constant_ = 0.0;
+  }
+
+ private:
+  TemporalDiscretization& d_;
+  std::vector<std::pair<int, double>> terms_;
+  double constant_ = 0.0;
+};
+
+// Boundary grid value from a given velocity and the tangent there.
+GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
+                        const TemporalProblem& p, const std::string& field, int* next_var) {
+  GridValue g;
+  const double tn = tangent.norm();
+  const double vn = velocity.norm();
+  if (tn <= p.zero_tangent_tolerance) {
+    if (vn != 0.0) {
+      throw std::invalid_argument(field + ": the curve's tangent vanishes there, so only a zero "
+                                          "velocity is possible");
+    }
+    g.var = (*next_var)++;  // v = f' sqrt(b) = 0 for any b: b is free
+    return g;
+  }
+  if (vn == 0.0) {
+    g.fixed = 0.0;
+    return g;
+  }
+  const double angle = Angle(velocity, tangent);
+  if (angle > p.parallel_tolerance) {
+    std::ostringstream ss;
+    ss << field << ": must be parallel to the curve's tangent (" << tangent.transpose()
+       << "), the angle is " << angle << " rad";
+    throw std::invalid_argument(ss.str());
+  }
+  g.fixed = (vn / tn) * (vn / tn);
+  return g;
+}
+
+}  // namespace
+
+double TemporalDiscretization::GridB(int g, const std::vector<double>& x) const {
+  const GridValue& v = grid[static_cast<size_t>(g)];
+  return v.var < 0 ? v.fixed : v.scale * x[static_cast<size_t>(v.var)];
+}
+
+double TemporalDiscretization::Objective(const std::vector<double>& x, double* total_time) const {
+  double time = 0.0, reg = 0.0;
+  for (const Cell& c : cells) {
+    const double b0 = std::max(0.0, GridB(c.first_grid, x));
+    const double b1 = std::max(0.0, GridB(c.first_grid + 1, x));
+    const double root = std::sqrt(b0) + std::sqrt(b1);
+    time += root > 0.0 ? 2.0 * c.ds / root : std::numeric_limits<double>::infinity();
+    const double a = (b1 - b0) / (2.0 * c.ds);
+    reg += a * a * c.ds;
+  }
+  if (total_time) *total_time = time;
+  return time + rho * reg;
+}
+
+double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const {
+  double worst = 0.0;
+  for (size_t v = 0; v < var_upper.size(); ++v) {
+    worst = std::max(worst, -x[v]);
+    if (std::isfinite(var_upper[v])) worst = std::max(worst, x[v] - var_upper[v]);
+  }
+  for (const LinearRow& r : rows) {
+    double value = 0.0;
+    for (const auto& t : r.terms) value += t.second * x[static_cast<size_t>(t.first)];
+    if (std::isfinite(r.lower)) worst = std::max(worst, r.lower - value);
+    if (std::isfinite(r.upper)) worst = std::max(worst, value - r.upper);
+  }
+  return worst;
+}
+
+TemporalDiscretization Discretize(const TemporalProblem& problem) {
+  problem.Validate();
+  const PiecewiseCurve& curve = problem.curve;
+  const int m = curve.num_pieces();
+  const int K = problem.cells_per_piece;
+  const double ds = 1.0 / K;
+  const TemporalLimits& limits = problem.limits;
+
+  TemporalDiscretization d;
+  d.num_pieces = m;
+  d.cells_per_piece = K;
+  d.rho = problem.rho;
+  d.grid.resize(static_cast<size_t>(m) * static_cast<size_t>(K + 1));
+
+  // ---- joints ----
+  for (int i = 0; i + 1 < m; ++i) {
+    const Eigen::Vector3d t0 = curve.Evaluate(i, 1.0, 1), t1 = curve.Evaluate(i + 1, 0.0, 1);
+    JointInfo j;
+    j.joint = i;
+    const double n0 = t0.norm(), n1 = t1.norm();
+    if (n0 <= problem.zero_tangent_tolerance || n1 <= problem.zero_tangent_tolerance) {
+      j.type = JointType::kStop;
+      j.speed_ratio = 0.0;
+      j.angle = 0.0;
+    } else {
+      j.angle = Angle(t0, t1);
+      j.speed_ratio = n0 / n1;
+      if (j.angle > problem.parallel_tolerance) {
+        j.type = JointType::kStop;
+      } else if (std::abs(j.speed_ratio - 1.0) <= 1e-12) {
+        // Equal up to rounding: eq. 43 exactly.
+        j.type = JointType::kC1;
+        j.speed_ratio = 1.0;
+      } else {
+        j.type = JointType::kG1;
+      }
+    }
+    d.joints.push_back(j);
+  }
+
+  // ---- grid values ----
+  int next_var = 0;
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k <= K; ++k) {
+      GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, k))];
+      if (i == 0 && k == 0) {
+        g = BoundaryValue(problem.boundary.start_velocity, curve.Evaluate(0, 0.0, 1), problem,
+                          "boundary.start_velocity", &next_var);
+      } else if (i == m - 1 && k == K) {
+        g = BoundaryValue(problem.boundary.end_velocity, curve.Evaluate(m - 1, 1.0, 1), problem,
+                          "boundary.end_velocity", &next_var);
+      } else if (k == 0) {
+        const JointInfo& j = d.joints[static_cast<size_t>(i - 1)];
+        const GridValue& prev = d.grid[static_cast<size_t>(d.GridIndex(i - 1, K))];
+        if (j.type == JointType::kStop) {
+          g = GridValue{};
+        } else {
+          g = prev;
+          g.scale = prev.scale * j.speed_ratio * j.speed_ratio;
+        }
+      } else if (k == K && i + 1 < m &&
+                 d.joints[static_cast<size_t>(i)].type == JointType::kStop) {
+        g = GridValue{};  // fixed 0: the vehicle stops at the kink
+      } else {
+        g.var = next_var++;
+        g.scale = 1.0;
+      }
+    }
+  }
+  d.num_vars = next_var;
+  d.var_upper.assign(static_cast<size_t>(next_var), std::numeric_limits<double>::infinity());
+
+  // ---- cells ----
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < K; ++k) d.cells.push_back(Cell{i, d.GridIndex(i, k), ds});
+  }
+  for (const Cell& c : d.cells) {
+    if (d.grid[c.first_grid].var < 0 && d.grid[c.first_grid].fixed == 0.0 &&
+        d.grid[c.first_grid + 1].var < 0 && d.grid[c.first_grid + 1].fixed == 0.0) {
+      std::ostringstream ss;
+      ss << "piece " << c.piece << " must start and end at rest (zero speed at both ends of a "
+         << "single cell): it cannot be traversed with K = " << K << "; use K >= 2";
+      d.infeasible_reason = ss.str();
+    }
+  }
+
+  RowBuilder row(d);
+  const auto vmax2 = limits.max_velocity.cwiseProduct(limits.max_velocity);
+
+  // ---- velocity ----
+  if (problem.constraint_mode == ConstraintMode::kPaper) {
+    // eq. 41 at every grid point: f'_axis(s_k)^2 b_k <= vmax^2, a bound on the variable.
+    for (int i = 0; i < m; ++i) {
+      for (int k = 0; k <= K; ++k) {
+        const int g = d.GridIndex(i, k);
+        const GridValue& v = d.grid[static_cast<size_t>(g)];
+        const Eigen::Vector3d t = curve.Evaluate(i, k * ds, 1);
+        for (int a = 0; a < 3; ++a) {
+          const double t2 = t(a) * t(a);
+          if (t2 == 0.0) continue;
+          if (v.var >= 0) {
+            double& ub = d.var_upper[static_cast<size_t>(v.var)];
+            ub = std::min(ub, vmax2(a) / (t2 * v.scale));
+          } else {
+            row.Add(g, t2);
+            row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
+                       vmax2(a),
+                       std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
+                           std::to_string(i) + " s=" + std::to_string(k * ds));
+          }
+        }
+      }
+    }
+  } else {
+    // Certified: Bernstein coefficients of f'_axis(s)^2 b(s) on each cell, b linear in the cell.
+    for (const Cell& c : d.cells) {
+      const int k = c.first_grid - d.GridIndex(c.piece, 0);
+      const PolynomialPiece deriv = curve.piece(c.piece).Derivative(1);
+      for (int a = 0; a < 3; ++a) {
+        const Eigen::VectorXd q = Shifted(deriv.coefficients().row(a).transpose(), k * ds, ds);
+        if (q.cwiseAbs().maxCoeff() == 0.0) continue;
+        const Eigen::VectorXd q2 = Multiply(q, q);
+        Eigen::Vector2d one_minus_u(1.0, -1.0), u(0.0, 1.0);
+        const Eigen::VectorXd w0 = PowerToBernstein(Multiply(q2, one_minus_u));
+        const Eigen::VectorXd w1 = PowerToBernstein(Multiply(q2, u));
+        for (int j = 0; j < w0.size(); ++j) {
+          row.Add(c.first_grid, w0(j));
+          row.Add(c.first_grid + 1, w1(j));
+          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
+                     vmax2(a),
+                     std::string("squared velocity on axis ") + kAxisNames[a] + " in piece " +
+                         std::to_string(c.piece));
+        }
+      }
+    }
+  }
+
+  // ---- acceleration ----
+  // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on (b^k, b^{k+1}):
+  // f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Kept for the acceleration-change rows in both modes.
+  std::vector<Eigen::Matrix<double, 3, 2>> mid_acc(d.cells.size());
+  for (size_t ci = 0; ci < d.cells.size(); ++ci) {
+    const Cell& c = d.cells[ci];
+    const int k = c.first_grid - d.GridIndex(c.piece, 0);
+    const double s_mid = (k + 0.5) * ds;
+    const Eigen::Vector3d f1 = curve.Evaluate(c.piece, s_mid, 1);
+    const Eigen::Vector3d f2 = curve.Evaluate(c.piece, s_mid, 2);
+    mid_acc[ci].col(0) = -f1 / (2.0 * ds) + f2 / 2.0;
+    mid_acc[ci].col(1) = f1 / (2.0 * ds) + f2 / 2.0;
+  }
+  for (size_t ci = 0; ci < d.cells.size(); ++ci) {
+    const Cell& c = d.cells[ci];
+    for (int a = 0; a < 3; ++a) {
+      const double amax = limits.max_acceleration(a);
+      const std::string what = std::string("acceleration on axis ") + kAxisNames[a] +
+                               " in piece " + std::to_string(c.piece);
+      if (problem.constraint_mode == ConstraintMode::kPaper) {
+        row.Add(c.first_grid, mid_acc[ci](a, 0));
+        row.Add(c.first_grid + 1, mid_acc[ci](a, 1));
+        row.Finish(LinearRow::Kind::kAcceleration, -amax, amax, what);
+      } else {
+        // Certified: acc(u) = f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
+        const int k = c.first_grid - d.GridIndex(c.piece, 0);
+        const Eigen::VectorXd p1 =
+            Shifted(curve.piece(c.piece).Derivative(1).coefficients().row(a).transpose(), k * ds, ds);
+        const Eigen::VectorXd p2 =
+            Shifted(curve.piece(c.piece).Derivative(2).coefficients().row(a).transpose(), k * ds, ds);
+        const Eigen::VectorXd p2a = Multiply(p2, Eigen::Vector2d(1.0, -1.0));
+        const Eigen::VectorXd p2b = Multiply(p2, Eigen::Vector2d(0.0, 1.0));
+        const int size = static_cast<int>(std::max(p1.size(), p2a.size()));
+        const Eigen::VectorXd c0 = PowerToBernstein(Padded(-p1 / (2.0 * ds), size) + Padded(p2a, size));
+        const Eigen::VectorXd c1 = PowerToBernstein(Padded(p1 / (2.0 * ds), size) + Padded(p2b, size));
+        for (int j = 0; j < size; ++j) {
+          row.Add(c.first_grid, c0(j));
+          row.Add(c.first_grid + 1, c1(j));
+          row.Finish(LinearRow::Kind::kAcceleration, -amax, amax, what);
+        }
+      }
+    }
+  }
+
+  // ---- acceleration change (eqs. 44-45, 48-49) ----
+  if (limits.max_acceleration_change) {
+    const double lambda = *limits.max_acceleration_change;
+    for (int a = 0; a < 3; ++a) {
+      for (size_t ci = 0; ci + 1 < d.cells.size(); ++ci) {
+        row.Add(d.cells[ci + 1].first_grid, mid_acc[ci + 1](a, 0));
+        row.Add(d.cells[ci + 1].first_grid + 1, mid_acc[ci + 1](a, 1));
+        row.Add(d.cells[ci].first_grid, -mid_acc[ci](a, 0));
+        row.Add(d.cells[ci].first_grid + 1, -mid_acc[ci](a, 1));
+        row.Finish(LinearRow::Kind::kAccelerationChange, -lambda, lambda,
+                   std::string("acceleration change on axis ") + kAxisNames[a]);
+      }
+      const size_t last = d.cells.size() - 1;
+      const double a0 = problem.boundary.start_acceleration(a);
+      const double af = problem.boundary.end_acceleration(a);
+      row.Add(d.cells[0].first_grid, mid_acc[0](a, 0));
+      row.Add(d.cells[0].first_grid + 1, mid_acc[0](a, 1));
+      row.Finish(LinearRow::Kind::kBoundaryAcceleration, a0 - lambda, a0 + lambda,
+                 std::string("first cell's acceleration on axis ") + kAxisNames[a]);
+      row.Add(d.cells[last].first_grid, mid_acc[last](a, 0));
+      row.Add(d.cells[last].first_grid + 1, mid_acc[last](a, 1));
+      row.Finish(LinearRow::Kind::kBoundaryAcceleration, af - lambda, af + lambda,
+                 std::string("last cell's acceleration on axis ") + kAxisNames[a]);
+    }
+  }
+  return d;
+}
+
+}  // namespace timeopt

@@ -1,0 +1,189 @@
+// The paper's SOCP (eqs. 30-38, 50) over the shared discretization, solved by timeopt::conic.
+//
+// Variables: x (free grid values, b = scale * x), c_v <= sqrt(x_v) per free value, d_k per cell,
+// and t when rho > 0. Cones:
+//   (x_v, 1/2, c_v) rotated          <=>  c_v^2 <= x_v                       (eqs. 31, 35)
+//   (d_k, S_k, sqrt 2) rotated       <=>  d_k S_k >= 1,  S_k = sqrt(b^k) + sqrt(b^{k+1})  (eqs. 30-34)
+//   (t, 1/2, a_0 ... a_{N-1}) rotated <=> t >= sum a_k^2, a_k = (b^{k+1} - b^k) / (2 ds) (eqs. 37-38, 50)
+// where sqrt(b) = sqrt(scale) c_v for a free value and a constant for a fixed one (presolve: a
+// fixed b = 0 would leave the cone c <= sqrt(b) without interior, so c is not a variable there).
+// Objective: sum 2 ds d_k + rho ds t (eq. 36). Velocity bounds, acceleration and
+// acceleration-change rows are the discretization's linear rows.
+
+#include <chrono>
+#include <cmath>
+
+#include "timeopt/conic/problem_builder.h"
+#include "timeopt/conic/solver.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+conic::Problem BuildSocp(const TemporalDiscretization& d) {
+  conic::ProblemBuilder builder;
+  const int nx = d.num_vars;
+  const int x0 = builder.AddVariables(nx);
+  const int c0 = builder.AddVariables(nx);
+  const int d0 = builder.AddVariables(static_cast<int>(d.cells.size()));
+
+  for (int v = 0; v < nx; ++v) {
+    builder.AddRotatedCone({conic::AffineExpr{{{x0 + v, 1.0}}, 0.0}, conic::AffineExpr{{}, 0.5},
+                            conic::AffineExpr{{{c0 + v, 1.0}}, 0.0}});
+    if (std::isfinite(d.var_upper[v])) builder.AddLessEqual({{x0 + v, 1.0}}, d.var_upper[v]);
+  }
+
+  // sqrt(b_g) as an affine expression in c.
+  const auto add_root = [&](int g, conic::AffineExpr& e) {
+    const GridValue& v = d.grid[static_cast<size_t>(g)];
+    if (v.var < 0) {
+      e.constant += std::sqrt(v.fixed);
+    } else {
+      e.terms.push_back({c0 + v.var, std::sqrt(v.scale)});
+    }
+  };
+  // b_g times coef as terms in x (fixed values go to the constant).
+  const auto add_b = [&](int g, double coef, conic::AffineExpr& e) {
+    const GridValue& v = d.grid[static_cast<size_t>(g)];
+    if (v.var < 0) {
+      e.constant += coef * v.fixed;
+    } else {
+      e.terms.push_back({x0 + v.var, coef * v.scale});
+    }
+  };
+
+  const double sqrt2 = std::sqrt(2.0);
+  for (size_t k = 0; k < d.cells.size(); ++k) {
+    const Cell& cell = d.cells[k];
+    const int dk = d0 + static_cast<int>(k);
+    builder.SetObjectiveCoefficient(dk, 2.0 * cell.ds);
+    conic::AffineExpr roots;
+    add_root(cell.first_grid, roots);
+    add_root(cell.first_grid + 1, roots);
+    builder.AddRotatedCone({conic::AffineExpr{{{dk, 1.0}}, 0.0}, roots, conic::AffineExpr{{}, sqrt2}});
+  }
+
+  if (d.rho > 0.0) {
+    const int t = builder.AddVariables(1);
+    // All cells share ds = 1/K, so rho * sum a^2 ds = rho ds t.
+    builder.SetObjectiveCoefficient(t, d.rho * d.cells.front().ds);
+    std::vector<conic::AffineExpr> rows;
+    rows.reserve(d.cells.size() + 2);
+    rows.push_back(conic::AffineExpr{{{t, 1.0}}, 0.0});
+    rows.push_back(conic::AffineExpr{{}, 0.5});
+    for (const Cell& cell : d.cells) {
+      conic::AffineExpr a;
+      add_b(cell.first_grid + 1, 0.5 / cell.ds, a);
+      add_b(cell.first_grid, -0.5 / cell.ds, a);
+      rows.push_back(std::move(a));
+    }
+    builder.AddRotatedCone(rows);
+  }
+
+  for (const LinearRow& row : d.rows) {
+    std::vector<conic::Term> plus, minus;
+    plus.reserve(row.terms.size());
+    minus.reserve(row.terms.size());
+    for (const auto& t : row.terms) {
+      plus.push_back({x0 + t.first, t.second});
+      minus.push_back({x0 + t.first, -t.second});
+    }
+    if (std::isfinite(row.upper)) builder.AddLessEqual(plus, row.upper);
+    if (std::isfinite(row.lower)) builder.AddLessEqual(minus, -row.lower);
+  }
+  return builder.Build();
+}
+
+class SocpTemporalSolver final : public TemporalSolver {
+ public:
+  explicit SocpTemporalSolver(const SocpTemporalOptions& options) : options_(options) {
+    conic::Solver::Options o;
+    o.feasibility_tolerance = options.tolerance;
+    o.absolute_gap_tolerance = options.tolerance;
+    o.relative_gap_tolerance = options.tolerance;
+    o.infeasibility_tolerance = options.tolerance;
+    o.max_iterations = options.max_iterations;
+    solver_ = conic::Solver(o);
+  }
+
+  TemporalBackend backend() const override { return TemporalBackend::kSocp; }
+
+  TemporalResult Solve(const TemporalProblem& problem) override {
+    TemporalResult result;
+    result.solver = "socp";
+    const auto start = Clock::now();
+    TemporalDiscretization d;
+    try {
+      d = Discretize(problem);
+    } catch (const std::invalid_argument& e) {
+      result.status = TemporalStatus::kInvalidInput;
+      result.message = e.what();
+      return result;
+    }
+    result.joints = d.joints;
+    if (d.infeasible_reason) {
+      result.status = TemporalStatus::kInfeasible;
+      result.message = *d.infeasible_reason;
+      result.build_time_seconds = Seconds(start, Clock::now());
+      return result;
+    }
+    if (d.num_vars == 0) {
+      // Every grid value is fixed: nothing to optimize, only to check.
+      std::vector<double> x;
+      if (d.MaxViolation(x) > 0.0) {
+        result.status = TemporalStatus::kInfeasible;
+        result.message = "the fixed speeds violate a limit";
+        return result;
+      }
+      FinishOptimalResult(problem, d, x, &result);
+      return result;
+    }
+    const conic::Problem socp = BuildSocp(d);
+    result.build_time_seconds = Seconds(start, Clock::now());
+
+    const conic::Result r = solver_.Solve(socp);
+    result.iterations = r.iterations;
+    result.solve_time_seconds = r.solve_time_seconds;
+    switch (r.status) {
+      case conic::Status::kOptimal: {
+        std::vector<double> x(r.x.data(), r.x.data() + d.num_vars);
+        FinishOptimalResult(problem, d, x, &result);
+        result.message = r.message;
+        break;
+      }
+      case conic::Status::kPrimalInfeasible:
+        result.status = TemporalStatus::kInfeasible;
+        result.message = "no time allocation satisfies the limits (conic solver: " + r.message + ")";
+        break;
+      case conic::Status::kIterationLimit:
+        result.status = TemporalStatus::kIterationLimit;
+        result.message = r.message;
+        break;
+      case conic::Status::kDualInfeasible:
+      case conic::Status::kNumericalError:
+      case conic::Status::kNotSolved:
+        result.status = TemporalStatus::kNumericalError;
+        result.message = std::string("conic solver: ") + conic::ToString(r.status) + ": " + r.message;
+        break;
+    }
+    return result;
+  }
+
+ private:
+  SocpTemporalOptions options_;
+  conic::Solver solver_;
+};
+
+}  // namespace
+
+std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options) {
+  return std::make_unique<SocpTemporalSolver>(options);
+}
+
+}  // namespace timeopt

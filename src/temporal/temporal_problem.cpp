@@ -1,0 +1,75 @@
+#include "timeopt/temporal/temporal_problem.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace timeopt {
+namespace {
+
+std::string Num(double v) {
+  std::ostringstream ss;
+  ss << v;
+  return ss.str();
+}
+
+void CheckPositive(double v, const std::string& field) {
+  if (!std::isfinite(v) || !(v > 0.0)) {
+    throw std::invalid_argument(field + ": expected a positive finite number, got " + Num(v));
+  }
+}
+
+void CheckFinite(const Eigen::Vector3d& v, const std::string& field) {
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(v(a))) {
+      throw std::invalid_argument(field + "[" + std::to_string(a) + "]: expected a finite number");
+    }
+  }
+}
+
+}  // namespace
+
+const char* ToString(ConstraintMode mode) {
+  switch (mode) {
+    case ConstraintMode::kPaper: return "paper";
+    case ConstraintMode::kCertified: return "certified";
+  }
+  return "unknown";
+}
+
+void TemporalProblem::Validate() const {
+  if (curve.empty()) throw std::invalid_argument("curve: expected at least 1 piece, got 0");
+  for (int i = 0; i < curve.num_pieces(); ++i) {
+    const auto& c = curve.piece(i).coefficients();
+    if (c.cols() < 2 || c.rightCols(c.cols() - 1).cwiseAbs().maxCoeff() == 0.0) {
+      throw std::invalid_argument("curve.pieces[" + std::to_string(i) +
+                                  "]: the piece has zero length (constant polynomial)");
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    CheckPositive(limits.max_velocity(a), "limits.max_velocity[" + std::to_string(a) + "]");
+    CheckPositive(limits.max_acceleration(a), "limits.max_acceleration[" + std::to_string(a) + "]");
+  }
+  if (limits.max_acceleration_change) {
+    CheckPositive(*limits.max_acceleration_change, "limits.max_acceleration_change");
+  }
+  CheckFinite(boundary.start_velocity, "boundary.start_velocity");
+  CheckFinite(boundary.start_acceleration, "boundary.start_acceleration");
+  CheckFinite(boundary.end_velocity, "boundary.end_velocity");
+  CheckFinite(boundary.end_acceleration, "boundary.end_acceleration");
+  if (cells_per_piece < 1) {
+    throw std::invalid_argument("discretization.K: expected at least 1 cell per piece, got " +
+                                std::to_string(cells_per_piece));
+  }
+  if (cells_per_piece > 100000) {
+    throw std::invalid_argument("discretization.K: at most 100000 cells per piece, got " +
+                                std::to_string(cells_per_piece));
+  }
+  if (!std::isfinite(rho) || rho < 0.0) {
+    throw std::invalid_argument("rho: expected a finite number >= 0, got " + Num(rho));
+  }
+  CheckPositive(parallel_tolerance, "parallel_tolerance");
+  CheckPositive(zero_tangent_tolerance, "zero_tangent_tolerance");
+}
+
+}  // namespace timeopt

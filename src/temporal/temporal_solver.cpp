@@ -1,0 +1,87 @@
+#include "timeopt/temporal/temporal_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace timeopt {
+
+const char* ToString(TemporalStatus status) {
+  switch (status) {
+    case TemporalStatus::kOptimal: return "optimal";
+    case TemporalStatus::kInfeasible: return "infeasible";
+    case TemporalStatus::kIterationLimit: return "iteration_limit";
+    case TemporalStatus::kNumericalError: return "numerical_error";
+    case TemporalStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+const char* ToString(TemporalBackend backend) {
+  switch (backend) {
+    case TemporalBackend::kSocp: return "socp";
+    case TemporalBackend::kIpopt: return "ipopt";
+  }
+  return "unknown";
+}
+
+std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
+  switch (backend) {
+    case TemporalBackend::kSocp: return MakeSocpTemporalSolver();
+    case TemporalBackend::kIpopt: return MakeIpoptTemporalSolver();
+  }
+  throw std::invalid_argument("MakeTemporalSolver: unknown backend");
+}
+
+void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
+                      int samples_per_cell, double* max_velocity_ratio,
+                      double* max_acceleration_ratio) {
+  if (samples_per_cell < 1) throw std::invalid_argument("DenseLimitRatios: samples_per_cell < 1");
+  double vr = 0.0, ar = 0.0;
+  const int K = profile.cells_per_piece();
+  const double ds = profile.ds();
+  const Eigen::Vector3d inv_v = problem.limits.max_velocity.cwiseInverse();
+  const Eigen::Vector3d inv_a = problem.limits.max_acceleration.cwiseInverse();
+  for (int i = 0; i < profile.num_pieces(); ++i) {
+    const PolynomialPiece& piece = problem.curve.piece(i);
+    for (int k = 0; k < K; ++k) {
+      const double b0 = profile.b(i, k), b1 = profile.b(i, k + 1);
+      const double a = profile.a(i, k);
+      for (int j = 0; j <= samples_per_cell; ++j) {
+        const double u = static_cast<double>(j) / samples_per_cell;
+        const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
+        const double s = (k + u) * ds;
+        const Eigen::Vector3d f1 = piece.Evaluate(s, 1), f2 = piece.Evaluate(s, 2);
+        vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
+        ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+      }
+    }
+  }
+  *max_velocity_ratio = vr;
+  *max_acceleration_ratio = ar;
+}
+
+void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
+                         const std::vector<double>& x, TemporalResult* result) {
+  const int K = d.cells_per_piece;
+  std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces),
+                                     std::vector<double>(static_cast<size_t>(K) + 1));
+  for (int i = 0; i < d.num_pieces; ++i) {
+    for (int k = 0; k <= K; ++k) {
+      // Interior-point iterates may sit a rounding error below zero.
+      b[i][k] = std::max(0.0, d.GridB(d.GridIndex(i, k), x));
+    }
+  }
+  result->profile = TemporalProfile(std::move(b));
+  result->total_time = result->profile.total_time();
+  result->piece_durations = result->profile.piece_durations();
+  double time = 0.0;
+  result->objective = d.Objective(x, &time);
+  result->status = TemporalStatus::kOptimal;
+  // 32 samples per cell: the polynomials on a cell have degree <= 2n - 1, so a 1/32 spacing
+  // resolves their extrema well below the cell's size.
+  DenseLimitRatios(problem, result->profile, 32, &result->max_velocity_ratio,
+                   &result->max_acceleration_ratio);
+}
+
+}  // namespace timeopt
