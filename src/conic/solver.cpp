@@ -61,7 +61,11 @@ bool SolverOptions::IsValid(std::string* error) const {
   }
   if (!positive(dynamic_regularization)) return fail("dynamic_regularization must be positive and finite");
   if (max_refinement_steps < 0) return fail("max_refinement_steps must be >= 0");
+  if (max_affine_refinement_steps < 0) return fail("max_affine_refinement_steps must be >= 0");
   if (!(refinement_tolerance >= 0.0)) return fail("refinement_tolerance must be >= 0");
+  if (!(refinement_stagnation > 0.0 && refinement_stagnation <= 1.0)) {
+    return fail("refinement_stagnation must be in (0, 1]");
+  }
   if (sparse_cone_min_dimension < 1) return fail("sparse_cone_min_dimension must be >= 1");
   return true;
 }
@@ -69,9 +73,7 @@ bool SolverOptions::IsValid(std::string* error) const {
 namespace {
 
 double NormInf(const double* v, int n) {
-  double r = 0.0;
-  for (int i = 0; i < n; ++i) r = std::max(r, std::abs(v[i]));
-  return r;
+  return n > 0 ? Eigen::Map<const Eigen::VectorXd>(v, n).lpNorm<Eigen::Infinity>() : 0.0;
 }
 
 // Compressed sparse column matrix with a fixed pattern.
@@ -177,12 +179,14 @@ struct Solver::Workspace {
   void JordanDivide(const double* l, const double* v, double* out) const;  // out = l \ v
   double MaxStep(const double* u, const double* d) const;
   double MinEigenvalue(const double* u) const;  // orthant: u_i, SOC: u0 - ||u1||
+  bool StrictlyInterior(const double* u) const;  // the test that ComputeScaling relies on
   void AddIdentity(double* u, double alpha) const;
 
   void UpdateKktScaling(double delta);
   int Factor(const Options& options);
   // Solves K sol = rhs (unpermuted vectors) with iterative refinement on the unregularized matrix.
-  void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options);
+  void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
+                int max_refinement_steps);
   void KktMultiplyUnregularized(const double* v, double* out) const;  // permuted space
 };
 
@@ -485,7 +489,7 @@ bool Solver::Workspace::ComputeScaling() {
   for (int i = 0; i < num_orthant; ++i) {
     if (!(s[i] > 0.0 && z[i] > 0.0)) return false;
     w_orthant[i] = std::sqrt(s[i] / z[i]);
-    lambda[i] = std::sqrt(s[i] * z[i]);
+    lambda[i] = w_orthant[i] * z[i];
   }
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
@@ -657,6 +661,20 @@ double Solver::Workspace::MinEigenvalue(const double* u) const {
   return r;
 }
 
+bool Solver::Workspace::StrictlyInterior(const double* u) const {
+  for (int i = 0; i < num_orthant; ++i) {
+    if (!(u[i] > 0.0)) return false;
+  }
+  for (const SocBlock& blk : socs) {
+    double n1 = 0.0;
+    for (int i = 1; i < blk.dim; ++i) n1 += u[blk.start + i] * u[blk.start + i];
+    n1 = std::sqrt(n1);
+    const double u0 = u[blk.start];
+    if (!(u0 - n1 > 0.0 && (u0 - n1) * (u0 + n1) > 0.0)) return false;
+  }
+  return true;
+}
+
 void Solver::Workspace::AddIdentity(double* u, double alpha) const {
   for (int i = 0; i < num_orthant; ++i) u[i] += alpha;
   for (const SocBlock& blk : socs) u[blk.start] += alpha;
@@ -725,19 +743,30 @@ void Solver::Workspace::KktMultiplyUnregularized(const double* v, double* out) c
   }
 }
 
-void Solver::Workspace::SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options) {
+void Solver::Workspace::SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
+                                 int max_refinement_steps) {
   for (int k = 0; k < num_kkt; ++k) perm_rhs[k] = rhs[perm[k]];
   perm_sol = perm_rhs;
   ldl.Solve(perm_sol.data());
-  const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
-  for (int step = 0; step < options.max_refinement_steps; ++step) {
+  if (max_refinement_steps > 0) {
+    const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
     KktMultiplyUnregularized(perm_sol.data(), perm_res.data());
     perm_res = perm_rhs - perm_res;
-    const double norm = NormInf(perm_res.data(), num_kkt);
-    if (!(norm > bound)) break;
-    ldl.Solve(perm_res.data());
-    perm_sol += perm_res;
-    ++refinement_counter;
+    double norm = NormInf(perm_res.data(), num_kkt);
+    for (int step = 0; step < max_refinement_steps && norm > bound; ++step) {
+      // Candidate x + K~^{-1} r, accepted only if it reduces the residual of the exact system.
+      perm_corr = perm_res;
+      ldl.Solve(perm_corr.data());
+      perm_corr += perm_sol;
+      KktMultiplyUnregularized(perm_corr.data(), perm_res.data());
+      perm_res = perm_rhs - perm_res;
+      const double new_norm = NormInf(perm_res.data(), num_kkt);
+      ++refinement_counter;
+      if (!(new_norm < norm)) break;  // no progress (or NaN): keep the previous solution
+      perm_sol.swap(perm_corr);
+      if (new_norm > options.refinement_stagnation * norm) break;  // slow: not worth another solve
+      norm = new_norm;
+    }
   }
   for (int k = 0; k < num_kkt; ++k) sol[perm[k]] = perm_sol[k];
 }
@@ -790,12 +819,12 @@ Result Solver::Solve(const Problem& problem) {
   W.rhs1.setZero();
   W.rhs1.segment(n, p) = W.b;
   W.rhs1.segment(n + p, m) = W.h;
-  W.SolveKkt(W.rhs1, W.sol1, options_);
+  W.SolveKkt(W.rhs1, W.sol1, options_, options_.max_refinement_steps);
   W.x = W.sol1.head(n);
   W.s = -W.sol1.segment(n + p, m);
   W.rhs2.setZero();
   W.rhs2.head(n) = -W.c;
-  W.SolveKkt(W.rhs2, W.sol2, options_);
+  W.SolveKkt(W.rhs2, W.sol2, options_, options_.max_refinement_steps);
   W.y = W.sol2.segment(n, p);
   W.z = W.sol2.segment(n + p, m);
   {
@@ -920,13 +949,13 @@ Result Solver::Solve(const Problem& problem) {
     W.rhs1.head(n) = -W.c;
     W.rhs1.segment(n, p) = W.b;
     W.rhs1.segment(n + p, m) = W.h;
-    W.SolveKkt(W.rhs1, W.sol1, options_);
+    W.SolveKkt(W.rhs1, W.sol1, options_, options_.max_refinement_steps);
     const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
                          W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
 
     // One Newton direction for the residual weight `eta_r`, complementarity right-hand side W.d_s
     // (cones) and d_kappa. Fills dx, dy, dz, ds and returns (dtau, dkappa).
-    auto direction = [&](double eta_r, double d_kappa, double& dtau, double& dkappa) {
+    auto direction = [&](double eta_r, double d_kappa, int refinement_steps, double& dtau, double& dkappa) {
       // dtmp1 = lambda \ d_s, dtmp2 = W dtmp1.
       W.JordanDivide(W.lambda.data(), W.d_s.data(), W.dtmp1.data());
       W.ApplyW(W.dtmp1.data(), W.dtmp2.data());
@@ -934,7 +963,7 @@ Result Solver::Solve(const Problem& problem) {
       W.rhs2.segment(n, p) = -eta_r * W.ry;
       W.rhs2.segment(n + p, m) = -eta_r * W.rz + W.dtmp2;
       if (N > n + p + m) W.rhs2.tail(N - n - p - m).setZero();
-      W.SolveKkt(W.rhs2, W.sol2, options_);
+      W.SolveKkt(W.rhs2, W.sol2, options_, refinement_steps);
       const double numer = -eta_r * rtau + d_kappa / tau -
                            (W.c.dot(W.sol2.head(n)) + W.b.dot(W.sol2.segment(n, p)) +
                             W.h.dot(W.sol2.segment(n + p, m)));
@@ -958,7 +987,7 @@ Result Solver::Solve(const Problem& problem) {
     // ---- predictor (affine scaling) ----
     W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
     double dtau_a = 0.0, dkappa_a = 0.0;
-    direction(1.0, tau * kappa, dtau_a, dkappa_a);
+    direction(1.0, tau * kappa, options_.max_affine_refinement_steps, dtau_a, dkappa_a);
     const double alpha_a = std::min(1.0, max_step(dtau_a, dkappa_a));
     sigma = std::pow(1.0 - alpha_a, 3);
     sigma = std::min(1.0, std::max(0.0, sigma));
@@ -972,7 +1001,7 @@ Result Solver::Solve(const Problem& problem) {
     W.AddIdentity(W.d_s.data(), -sigma * mu);
     const double d_kappa = tau * kappa + dtau_a * dkappa_a - sigma * mu;
     double dtau = 0.0, dkappa = 0.0;
-    direction(1.0 - sigma, d_kappa, dtau, dkappa);
+    direction(1.0 - sigma, d_kappa, options_.max_refinement_steps, dtau, dkappa);
     step = std::min(1.0, options_.step_fraction * max_step(dtau, dkappa));
     iteration_refinements = W.refinement_counter - refinements_before;
 
@@ -988,10 +1017,29 @@ Result Solver::Solve(const Problem& problem) {
       message = "step length below min_step";
       break;
     }
+    // The exact step keeps the iterate inside the cones, but rounding can put a nearly active cone on
+    // its boundary (e.g. s0 - ||s1|| of a cone with large entries); shorten the step until the new
+    // point is strictly interior so that the next scaling exists.
+    bool interior = false;
+    for (int attempt = 0; attempt < 40 && step >= options_.min_step; ++attempt) {
+      W.dtmp1 = W.s + step * W.ds;
+      W.dtmp3 = W.z + step * W.dz;
+      if (W.tau + step * dtau > 0.0 && W.kappa + step * dkappa > 0.0 && W.StrictlyInterior(W.dtmp1.data()) &&
+          W.StrictlyInterior(W.dtmp3.data())) {
+        interior = true;
+        break;
+      }
+      step *= 0.5;
+    }
+    if (!interior) {
+      status = Status::kNumericalError;
+      message = "no step keeps the iterate inside the cones";
+      break;
+    }
     W.x += step * W.dx;
     W.y += step * W.dy;
-    W.z += step * W.dz;
-    W.s += step * W.ds;
+    W.s.swap(W.dtmp1);
+    W.z.swap(W.dtmp3);
     W.tau += step * dtau;
     W.kappa += step * dkappa;
   }
@@ -1002,6 +1050,9 @@ Result Solver::Solve(const Problem& problem) {
   result.iterations = iteration;
   result.num_refinement_steps = W.refinement_counter;
   result.num_dynamic_regularizations = dynamic_regs;
+  result.kkt_size = N;
+  result.kkt_nonzeros = static_cast<long long>(W.k_idx.size());
+  result.factor_nonzeros = W.ldl.num_factor_nonzeros();
   result.x.setZero(n);
   result.y.setZero(p);
   result.z.setZero(m);

@@ -67,6 +67,8 @@ void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vecto
     }
   }
   d_.assign(n, 0.0);
+  inv_d_.assign(n, 0.0);
+  l_row_val_.assign(row_col_.size(), 0.0);
   work_.assign(n, 0.0);
 }
 
@@ -97,22 +99,28 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
       ++regularized;
     }
     d_[k] = d;
+    inv_d_[k] = 1.0 / d;
   }
+  // Row-wise copy of L for the forward solve (a gather per row instead of a scatter per column).
+  const int nnz = static_cast<int>(row_slot_.size());
+  for (int q = 0; q < nnz; ++q) l_row_val_[q] = lx[row_slot_[q]];
   return regularized;
 }
 
 void SparseLdl::Solve(double* x) const {
+  // Forward by rows of L (a gather per row, from the row-wise copy), backward by columns of L (a
+  // gather per column): no scattered writes.
   const double* lx = l_val_.data();
   const int* li = l_row_.data();
-  for (int i = 0; i < n_; ++i) {
-    const double xi = x[i];
-    if (xi != 0.0) {
-      for (int p = l_col_ptr_[i]; p < l_col_ptr_[i + 1]; ++p) x[li[p]] -= lx[p] * xi;
-    }
+  const double* rv = l_row_val_.data();
+  const int* rc = row_col_.data();
+  for (int k = 0; k < n_; ++k) {
+    double sum = x[k];
+    for (int q = row_ptr_[k]; q < row_ptr_[k + 1]; ++q) sum -= rv[q] * x[rc[q]];
+    x[k] = sum;
   }
-  for (int i = 0; i < n_; ++i) x[i] /= d_[i];
   for (int i = n_ - 1; i >= 0; --i) {
-    double xi = x[i];
+    double xi = x[i] * inv_d_[i];
     for (int p = l_col_ptr_[i]; p < l_col_ptr_[i + 1]; ++p) xi -= lx[p] * x[li[p]];
     x[i] = xi;
   }

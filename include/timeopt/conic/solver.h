@@ -91,6 +91,9 @@ struct Result {
   int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
   int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
   bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
+  int kkt_size = 0;                ///< Dimension of the KKT system (n + p + m + 2 per expanded cone).
+  long long kkt_nonzeros = 0;      ///< Stored non-zeros of the KKT upper triangle.
+  long long factor_nonzeros = 0;   ///< Non-zeros of the LDL' factor L (strictly lower part).
 
   /// True iff status == kOptimal.
   bool is_success() const { return status == Status::kOptimal; }
@@ -128,8 +131,14 @@ struct SolverOptions {
   double dynamic_regularization = 1e-7;
   /// Maximum iterative refinement steps per KKT solve, on the unregularized system. 6.
   int max_refinement_steps = 6;
-  /// Refinement stops once ||residual||_inf <= this * (1 + ||rhs||_inf). 1e-13.
-  double refinement_tolerance = 1e-13;
+  /// The same for the affine (predictor) direction, which only sets the centering and the second-order
+  /// correction, so a rough solve suffices. 0.
+  int max_affine_refinement_steps = 0;
+  /// Refinement stops once ||residual||_inf <= this * (1 + ||rhs||_inf). 1e-12.
+  double refinement_tolerance = 1e-12;
+  /// Refinement also stops when one step reduces the residual by less than this factor, in (0, 1]:
+  /// further steps would cost a solve each for little gain. 0.5.
+  double refinement_stagnation = 0.5;
   /// Second-order cones of at least this dimension use the sparse expansion of their scaling
   /// (two extra KKT rows per cone) instead of a dense block. >= 1. 6: below that a dense block
   /// has fewer non-zeros than the expansion.

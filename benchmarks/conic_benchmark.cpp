@@ -1,0 +1,241 @@
+// Benchmarks of the conic interior-point solver (timeopt::conic::Solver).
+//
+//   BM_Temporal/N         the temporal-stage SOCP with N cells (banded, N+1 small rotated cones per
+//                         family, one rotated cone of dimension N+2), three axes of linear limits;
+//   BM_RandomSocp/n       random sparse SOCPs with n variables, strictly feasible primal and dual;
+//   BM_TemporalSlope, BM_RandomSocpSlope
+//                         log-log least-squares slope of the median solve time against the number
+//                         of variables over the sizes measured before them.
+// Each timed iteration is one Solve() on a reused Solver (the re-planning case: ordering, symbolic
+// factorization and memory are reused). Counters: ipm_iterations, median_ms (median over the timed
+// solves), ms_per_ipm_iteration, analyze_ms (first solve, including ordering and symbolic analysis),
+// n (variables), p (equalities), m (cone rows), kkt (KKT dimension), nnz_l is not exposed.
+// Run: build-conic/conic_benchmark --benchmark_filter=Temporal
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "timeopt/conic/problem_builder.h"
+#include "timeopt/conic/solver.h"
+
+namespace {
+
+using timeopt::conic::AffineExpr;
+using timeopt::conic::Problem;
+using timeopt::conic::ProblemBuilder;
+using timeopt::conic::Result;
+using timeopt::conic::Solver;
+using timeopt::conic::Status;
+using timeopt::conic::Term;
+
+// The temporal problem of the paper (eqs. 26-41) on one long curve of N cells, ds = 1/50:
+//   minimize  sum_k 2 ds d_k + rho t
+//   s.t.      b_{k+1} - b_k = 2 ds a_k,  b_0 = b_N = 0,
+//             c_k <= sqrt(b_k)                 as the rotated cone (b_k, 1/2, c_k) (k = 1..N-1;
+//                                              c_0 = c_N = 0 since b is fixed to 0 there),
+//             d_k (c_k + c_{k+1}) >= 1          as the rotated cone (c_k + c_{k+1}, d_k, sqrt2),
+//             |alpha_k^j a_k + beta_k^j (b_k + b_{k+1}) / 2| <= amax   per axis j (3 axes),
+//             gamma_k^j b_k <= vmax^2                                   per axis j,
+//             2 t >= ||a||^2                    as the rotated cone (t, 1, a_0, ..., a_{N-1}).
+// alpha = f'(s_{k+1/2}), beta = f''(s_{k+1/2}), gamma = f'(s_k)^2 of a smooth random curve f.
+Problem TemporalProblem(int N, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const double ds = 1.0 / 50.0, amax = 1.0, vmax = 2.0, rho = 0.1;
+  // f_j(s) = L_j s + sum_q A_q sin(w_q s + phi_q): smooth, tangent bounded away from zero on axis 0.
+  double L[3], amp[3][3], w[3][3], phi[3][3];
+  for (int j = 0; j < 3; ++j) {
+    L[j] = j == 0 ? 2.0 : 0.5 * uni(rng);
+    for (int q = 0; q < 3; ++q) {
+      amp[j][q] = 0.3 * uni(rng);
+      w[j][q] = 0.5 + 2.0 * uni(rng);
+      phi[j][q] = 6.28 * uni(rng);
+    }
+  }
+  auto d1 = [&](int j, double s) {
+    double v = L[j];
+    for (int q = 0; q < 3; ++q) v += amp[j][q] * w[j][q] * std::cos(w[j][q] * s + phi[j][q]);
+    return v;
+  };
+  auto d2 = [&](int j, double s) {
+    double v = 0.0;
+    for (int q = 0; q < 3; ++q) v -= amp[j][q] * w[j][q] * w[j][q] * std::sin(w[j][q] * s + phi[j][q]);
+    return v;
+  };
+  ProblemBuilder builder;
+  const int b = builder.AddVariables(N + 1);
+  const int c = builder.AddVariables(N + 1);
+  const int a = builder.AddVariables(N);
+  const int d = builder.AddVariables(N);
+  const int t = builder.AddVariables(1);
+  for (int k = 0; k < N; ++k) builder.SetObjectiveCoefficient(d + k, 2.0 * ds);
+  builder.SetObjectiveCoefficient(t, rho);
+  for (int k = 0; k < N; ++k) builder.AddEquality({{b + k + 1, 1.0}, {b + k, -1.0}, {a + k, -2.0 * ds}}, 0.0);
+  builder.AddEquality({{b, 1.0}}, 0.0);
+  builder.AddEquality({{b + N, 1.0}}, 0.0);
+  builder.AddEquality({{c, 1.0}}, 0.0);
+  builder.AddEquality({{c + N, 1.0}}, 0.0);
+  const double sqrt2 = std::sqrt(2.0);
+  for (int k = 0; k < N; ++k) {
+    const double sm = (k + 0.5) * ds;
+    for (int j = 0; j < 3; ++j) {
+      const double alpha = d1(j, sm), beta = d2(j, sm);
+      const std::vector<Term> row = {{a + k, alpha}, {b + k, 0.5 * beta}, {b + k + 1, 0.5 * beta}};
+      builder.AddLessEqual(row, amax);
+      std::vector<Term> neg = row;
+      for (Term& term : neg) term.coef = -term.coef;
+      builder.AddLessEqual(neg, amax);
+    }
+  }
+  for (int k = 0; k <= N; ++k) {
+    for (int j = 0; j < 3; ++j) {
+      const double gamma = d1(j, k * ds) * d1(j, k * ds);
+      builder.AddLessEqual({{b + k, gamma}}, vmax * vmax);
+    }
+  }
+  for (int k = 1; k < N; ++k) {
+    builder.AddRotatedCone({AffineExpr{{{b + k, 1.0}}, 0.0}, AffineExpr{{}, 0.5}, AffineExpr{{{c + k, 1.0}}, 0.0}});
+  }
+  for (int k = 0; k < N; ++k) {
+    builder.AddRotatedCone({AffineExpr{{{c + k, 1.0}, {c + k + 1, 1.0}}, 0.0}, AffineExpr{{{d + k, 1.0}}, 0.0},
+                            AffineExpr{{}, sqrt2}});
+  }
+  std::vector<AffineExpr> big = {AffineExpr{{{t, 1.0}}, 0.0}, AffineExpr{{}, 1.0}};
+  for (int k = 0; k < N; ++k) big.push_back(AffineExpr{{{a + k, 1.0}}, 0.0});
+  builder.AddRotatedCone(big);
+  return builder.Build();
+}
+
+// A random sparse SOCP with n variables, strictly feasible primal and dual (so it has an optimum):
+// n/4 equalities with 3 non-zeros each, n orthant rows and n/2 three-dimensional cones (3n/2 rows)
+// with 2-3 non-zeros per row. Column indices are drawn near the row's position along the variables
+// (a window of 30), as in problems discretized along a path; purely random patterns have fill that
+// grows faster than linearly under any ordering.
+Problem RandomSocp(int n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::uniform_int_distribution<int> window(-15, 15);
+  auto near = [&](int center) { return std::min(n - 1, std::max(0, center + window(rng))); };
+  const int p = n / 4, num_lin = n, num_soc = n / 2, m = num_lin + 3 * num_soc;
+  std::vector<Eigen::Triplet<double>> ta, tg;
+  for (int i = 0; i < p; ++i) {
+    const int center = static_cast<int>(static_cast<long long>(i) * n / p);
+    for (int q = 0; q < 3; ++q) ta.emplace_back(i, near(center), uni(rng));
+  }
+  for (int i = 0; i < m; ++i) {
+    const int center = static_cast<int>(static_cast<long long>(i) * n / m);
+    const int nz = 2 + static_cast<int>(rng() % 2);
+    for (int q = 0; q < nz; ++q) tg.emplace_back(i, near(center), uni(rng));
+  }
+  Problem problem;
+  problem.A.resize(p, n);
+  problem.A.setFromTriplets(ta.begin(), ta.end());
+  problem.G.resize(m, n);
+  problem.G.setFromTriplets(tg.begin(), tg.end());
+  problem.cones.num_nonnegative = num_lin;
+  problem.cones.soc_dims.assign(num_soc, 3);
+  // Interior points s0, z0 of K, a point x0 and duals y0: h = G x0 + s0, b = A x0, c = -A'y0 - G'z0.
+  Eigen::VectorXd x0 = Eigen::VectorXd::NullaryExpr(n, [&] { return uni(rng); });
+  Eigen::VectorXd y0 = Eigen::VectorXd::NullaryExpr(p, [&] { return uni(rng); });
+  Eigen::VectorXd s0(m), z0(m);
+  for (int i = 0; i < num_lin; ++i) {
+    s0[i] = 1.0 + uni(rng);
+    z0[i] = 1.0 + uni(rng);
+  }
+  for (int k = 0; k < num_soc; ++k) {
+    const int r = num_lin + 3 * k;
+    for (Eigen::VectorXd* v : {&s0, &z0}) {
+      (*v)[r + 1] = uni(rng);
+      (*v)[r + 2] = uni(rng);
+      (*v)[r] = std::hypot((*v)[r + 1], (*v)[r + 2]) + 0.5 + 0.5 * std::abs(uni(rng));
+    }
+  }
+  problem.h = problem.G * x0 + s0;
+  problem.b = problem.A * x0;
+  problem.c = -(problem.A.transpose() * y0) - problem.G.transpose() * z0;
+  return problem;
+}
+
+std::map<int, double>& Medians(const char* family) {
+  static std::map<std::string, std::map<int, double>> medians;
+  return medians[family];
+}
+
+void RunSolves(benchmark::State& state, const Problem& problem, const char* family) {
+  Solver solver;
+  auto t0 = std::chrono::steady_clock::now();
+  Result result = solver.Solve(problem);
+  const double analyze_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (result.status != Status::kOptimal) {
+    state.SkipWithError(("not optimal: " + result.BriefReport()).c_str());
+    return;
+  }
+  std::vector<double> times;
+  for (auto _ : state) {
+    t0 = std::chrono::steady_clock::now();
+    result = solver.Solve(problem);
+    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    benchmark::DoNotOptimize(result.x.data());
+  }
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  const double median = times[times.size() / 2];
+  Medians(family)[problem.num_variables()] = median;
+  state.counters["ipm_iterations"] = result.iterations;
+  state.counters["median_ms"] = median;
+  state.counters["ms_per_ipm_iteration"] = median / std::max(1, result.iterations);
+  state.counters["analyze_ms"] = analyze_ms;
+  state.counters["n"] = problem.num_variables();
+  state.counters["p"] = problem.num_equalities();
+  state.counters["m"] = problem.num_cone_rows();
+}
+
+void Slope(benchmark::State& state, const char* family) {
+  const std::map<int, double>& medians = Medians(family);
+  for (auto _ : state) {
+  }
+  if (medians.size() < 2) {
+    state.SkipWithError("run the sized benchmarks of this family first");
+    return;
+  }
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto& [n, ms] : medians) {
+    const double lx = std::log(static_cast<double>(n)), ly = std::log(ms);
+    sx += lx;
+    sy += ly;
+    sxx += lx * lx;
+    sxy += lx * ly;
+  }
+  const double k = static_cast<double>(medians.size());
+  state.counters["loglog_slope"] = (k * sxy - sx * sy) / (k * sxx - sx * sx);
+  state.counters["sizes"] = k;
+  state.counters["n_min"] = medians.begin()->first;
+  state.counters["n_max"] = medians.rbegin()->first;
+}
+
+void BM_Temporal(benchmark::State& state) {
+  const Problem problem = TemporalProblem(static_cast<int>(state.range(0)), 1);
+  RunSolves(state, problem, "temporal");
+}
+// N = 250 ... 25000 cells: n = 4N + 3 variables, about 1,000 to 100,000. N = 500 is the m=10, K=50 case.
+BENCHMARK(BM_Temporal)->Arg(250)->Arg(500)->Arg(1250)->Arg(2500)->Arg(6250)->Arg(12500)->Arg(25000)
+    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+void BM_TemporalSlope(benchmark::State& state) { Slope(state, "temporal"); }
+BENCHMARK(BM_TemporalSlope)->Iterations(1);
+
+void BM_RandomSocp(benchmark::State& state) {
+  const Problem problem = RandomSocp(static_cast<int>(state.range(0)), 2);
+  RunSolves(state, problem, "random");
+}
+BENCHMARK(BM_RandomSocp)->Arg(1000)->Arg(3000)->Arg(10000)->Arg(30000)->Arg(100000)
+    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+void BM_RandomSocpSlope(benchmark::State& state) { Slope(state, "random"); }
+BENCHMARK(BM_RandomSocpSlope)->Iterations(1);
+
+}  // namespace
