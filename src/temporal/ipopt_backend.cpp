@@ -1,0 +1,486 @@
+// The Ipopt backend of the temporal stage: the discretized problem of discretization.h as an NLP
+// in b (the free grid values x), with exact first and second derivatives (see ipopt_nlp.h).
+// Debian 12 ships Ipopt 3.11 with MUMPS as its only linear solver.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <IpIpoptApplication.hpp>
+#include <IpSolveStatistics.hpp>
+#include <IpTNLP.hpp>
+
+#include "ipopt_nlp.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+
+// ---------------------------------------------------------------------------------------------
+// IpoptTemporalNlp
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+std::int64_t EntryKey(int row, int col) {
+  return (static_cast<std::int64_t>(row) << 32) | static_cast<std::uint32_t>(col);
+}
+
+double IpoptBound(double v) {
+  if (v >= IpoptTemporalNlp::kIpoptInfinity) return IpoptTemporalNlp::kIpoptInfinity;
+  if (v <= -IpoptTemporalNlp::kIpoptInfinity) return -IpoptTemporalNlp::kIpoptInfinity;
+  return v;
+}
+
+}  // namespace
+
+IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
+  cells_.reserve(d.cells.size());
+  std::vector<std::int64_t> keys;
+  keys.reserve(3 * d.cells.size());
+  for (const Cell& cell : d.cells) {
+    CellTerms c;
+    c.ds = cell.ds;
+    for (int j = 0; j < 2; ++j) {
+      const GridValue& g = d.grid[static_cast<size_t>(cell.first_grid + j)];
+      c.var[j] = g.var;
+      c.scale[j] = g.scale;
+      c.fixed[j] = g.fixed;
+    }
+    for (int j = 0; j < 2; ++j) {
+      if (c.var[j] >= 0) keys.push_back(EntryKey(c.var[j], c.var[j]));
+    }
+    if (c.var[0] >= 0 && c.var[1] >= 0) {
+      keys.push_back(EntryKey(std::max(c.var[0], c.var[1]), std::min(c.var[0], c.var[1])));
+    }
+    cells_.push_back(c);
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  hess_rows_.reserve(keys.size());
+  hess_cols_.reserve(keys.size());
+  for (std::int64_t k : keys) {
+    hess_rows_.push_back(static_cast<int>(k >> 32));
+    hess_cols_.push_back(static_cast<int>(k & 0xffffffff));
+  }
+  const auto index_of = [&keys](int row, int col) {
+    const auto it = std::lower_bound(keys.begin(), keys.end(), EntryKey(row, col));
+    return static_cast<int>(it - keys.begin());
+  };
+  for (CellTerms& c : cells_) {
+    for (int j = 0; j < 2; ++j) {
+      if (c.var[j] >= 0) c.hess[j] = index_of(c.var[j], c.var[j]);
+    }
+    if (c.var[0] >= 0 && c.var[1] >= 0) {
+      c.hess[2] = index_of(std::max(c.var[0], c.var[1]), std::min(c.var[0], c.var[1]));
+    }
+  }
+  for (const LinearRow& r : d.rows) num_jacobian_entries_ += static_cast<int>(r.terms.size());
+}
+
+std::vector<double> IpoptTemporalNlp::StartingPoint() const {
+  const size_t n = static_cast<size_t>(d_.num_vars);
+  double cap = 0.0;
+  for (double u : d_.var_upper) {
+    if (std::isfinite(u)) cap = std::max(cap, u);
+  }
+  if (!(cap > 0.0)) cap = 1.0;
+  std::vector<double> x0(n);
+  for (size_t v = 0; v < n; ++v) x0[v] = std::min(d_.var_upper[v], cap);
+  double t_max = 1.0;
+  for (const LinearRow& r : d_.rows) {
+    if (!(r.lower < 0.0 && r.upper > 0.0)) continue;  // 0 not strictly inside: ignored
+    double value = 0.0;
+    for (const auto& t : r.terms) value += t.second * x0[static_cast<size_t>(t.first)];
+    if (value > r.upper) t_max = std::min(t_max, r.upper / value);
+    if (value < r.lower) t_max = std::min(t_max, r.lower / value);
+  }
+  for (double& v : x0) v *= 0.5 * t_max;
+  return x0;
+}
+
+bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
+                                    Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) {
+  n = d_.num_vars;
+  m = static_cast<Ipopt::Index>(d_.rows.size());
+  nnz_jac_g = num_jacobian_entries_;
+  nnz_h_lag = static_cast<Ipopt::Index>(hess_rows_.size());
+  index_style = C_STYLE;
+  return true;
+}
+
+bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u,
+                                       Ipopt::Index m, Ipopt::Number* g_l,
+                                       Ipopt::Number* g_u) {
+  if (n != d_.num_vars || m != static_cast<Ipopt::Index>(d_.rows.size())) return false;
+  for (Ipopt::Index v = 0; v < n; ++v) {
+    x_l[v] = 0.0;
+    x_u[v] = IpoptBound(d_.var_upper[static_cast<size_t>(v)]);
+  }
+  for (Ipopt::Index i = 0; i < m; ++i) {
+    const LinearRow& r = d_.rows[static_cast<size_t>(i)];
+    g_l[i] = IpoptBound(r.lower);
+    g_u[i] = IpoptBound(r.upper);
+  }
+  return true;
+}
+
+bool IpoptTemporalNlp::get_constraints_linearity(Ipopt::Index m, LinearityType* const_types) {
+  for (Ipopt::Index i = 0; i < m; ++i) const_types[i] = LINEAR;
+  return true;
+}
+
+bool IpoptTemporalNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x,
+                                          bool init_z, Ipopt::Number* /*z_L*/,
+                                          Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
+                                          bool init_lambda, Ipopt::Number* /*lambda*/) {
+  // Only a primal start is provided (no warm_start_init_point).
+  if (init_z || init_lambda || n != d_.num_vars) return false;
+  if (init_x) {
+    const std::vector<double> x0 = StartingPoint();
+    std::copy(x0.begin(), x0.end(), x);
+  }
+  return true;
+}
+
+bool IpoptTemporalNlp::eval_f(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
+                              Ipopt::Number& obj_value) {
+  const double rho = d_.rho;
+  double time = 0.0, reg = 0.0;
+  for (const CellTerms& c : cells_) {
+    const double b0 = std::max(0.0, B(c, 0, x));
+    const double b1 = std::max(0.0, B(c, 1, x));
+    time += 2.0 * c.ds / (std::sqrt(b0) + std::sqrt(b1));
+    const double diff = b1 - b0;
+    reg += diff * diff / (4.0 * c.ds);
+  }
+  obj_value = time + rho * reg;
+  // b = 0 at both ends of a cell: infinite time. Ipopt then shortens its step.
+  return std::isfinite(obj_value);
+}
+
+bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool /*new_x*/,
+                                   Ipopt::Number* grad_f) {
+  std::fill(grad_f, grad_f + n, 0.0);
+  const double rho = d_.rho;
+  for (const CellTerms& c : cells_) {
+    const double b0 = B(c, 0, x), b1 = B(c, 1, x);
+    const double r0 = std::sqrt(std::max(b0, kMinDerivativeB));
+    const double r1 = std::sqrt(std::max(b1, kMinDerivativeB));
+    const double s = r0 + r1;
+    const double reg = rho * (b1 - b0) / (2.0 * c.ds);  // dR/db1 = -dR/db0
+    const double db[2] = {-c.ds / (s * s * r0) - reg, -c.ds / (s * s * r1) + reg};
+    for (int j = 0; j < 2; ++j) {
+      if (c.var[j] >= 0) grad_f[c.var[j]] += c.scale[j] * db[j];
+    }
+  }
+  return true;
+}
+
+bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
+                              Ipopt::Index m, Ipopt::Number* g) {
+  for (Ipopt::Index i = 0; i < m; ++i) {
+    double value = 0.0;
+    for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) value += t.second * x[t.first];
+    g[i] = value;
+  }
+  return true;
+}
+
+bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* /*x*/,
+                                  bool /*new_x*/, Ipopt::Index m, Ipopt::Index nele_jac,
+                                  Ipopt::Index* iRow, Ipopt::Index* jCol,
+                                  Ipopt::Number* values) {
+  if (nele_jac != num_jacobian_entries_) return false;
+  Ipopt::Index e = 0;
+  for (Ipopt::Index i = 0; i < m; ++i) {
+    for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) {
+      if (values == nullptr) {
+        iRow[e] = i;
+        jCol[e] = t.first;
+      } else {
+        values[e] = t.second;
+      }
+      ++e;
+    }
+  }
+  return true;
+}
+
+bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
+                              Ipopt::Number obj_factor, Ipopt::Index /*m*/,
+                              const Ipopt::Number* /*lambda*/, bool /*new_lambda*/,
+                              Ipopt::Index nele_hess, Ipopt::Index* iRow, Ipopt::Index* jCol,
+                              Ipopt::Number* values) {
+  if (nele_hess != static_cast<Ipopt::Index>(hess_rows_.size())) return false;
+  if (values == nullptr) {
+    std::copy(hess_rows_.begin(), hess_rows_.end(), iRow);
+    std::copy(hess_cols_.begin(), hess_cols_.end(), jCol);
+    return true;
+  }
+  // The rows are linear: the constraint multipliers do not enter.
+  std::fill(values, values + nele_hess, 0.0);
+  const double rho = d_.rho;
+  for (const CellTerms& c : cells_) {
+    const double b0 = std::max(B(c, 0, x), kMinDerivativeB);
+    const double b1 = std::max(B(c, 1, x), kMinDerivativeB);
+    const double r0 = std::sqrt(b0), r1 = std::sqrt(b1);
+    const double s = r0 + r1;
+    const double s2 = s * s;
+    const double reg = rho / (2.0 * c.ds);
+    const double h00 = c.ds / (s2 * b0) * (1.0 / s + 0.5 / r0) + reg;
+    const double h11 = c.ds / (s2 * b1) * (1.0 / s + 0.5 / r1) + reg;
+    const double h01 = c.ds / (s2 * s * r0 * r1) - reg;
+    if (c.hess[0] >= 0) values[c.hess[0]] += obj_factor * c.scale[0] * c.scale[0] * h00;
+    if (c.hess[1] >= 0) values[c.hess[1]] += obj_factor * c.scale[1] * c.scale[1] * h11;
+    if (c.hess[2] >= 0) {
+      // A diagonal entry (both ends on one variable) receives the cross term twice.
+      const double twice = c.var[0] == c.var[1] ? 2.0 : 1.0;
+      values[c.hess[2]] += twice * obj_factor * c.scale[0] * c.scale[1] * h01;
+    }
+  }
+  return true;
+}
+
+void IpoptTemporalNlp::finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n,
+                                         const Ipopt::Number* x, const Ipopt::Number* /*z_L*/,
+                                         const Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
+                                         const Ipopt::Number* /*g*/,
+                                         const Ipopt::Number* /*lambda*/,
+                                         Ipopt::Number /*obj_value*/,
+                                         const Ipopt::IpoptData* /*ip_data*/,
+                                         Ipopt::IpoptCalculatedQuantities* /*ip_cq*/) {
+  solver_return_ = status;
+  solution_.assign(x, x + n);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The backend
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double>(to - from).count();
+}
+
+const char* ToString(Ipopt::ApplicationReturnStatus s) {
+  switch (s) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    case Ipopt::Internal_Error: return "Internal_Error";
+  }
+  return "unknown Ipopt status";
+}
+
+// Absolute bound on the unscaled violation of a row or a bound at Ipopt's solution (rows are in
+// m/s^2 or (m/s)^2, bounds in b). Ipopt's default (1e-4) would let T move by ~1e-4 relative;
+// 1e-9 is well above the rounding of rows with coefficients ~K |f'| and keeps T's error far
+// below the 1e-7 the tests ask.
+constexpr double kConstraintViolationTolerance = 1e-9;
+// Complementarity at the solution, in the units of row value times multiplier. Ipopt's default
+// (1e-4) again far too loose for T to 1e-7; 1e-9 as for the rows.
+constexpr double kComplementarityTolerance = 1e-9;
+// Ipopt stops at an "acceptable" point after kAcceptableIterations consecutive iterates whose
+// scaled error is below kAcceptableTolerance (and when it cannot make progress at such a point).
+// We count that as optimal only with these tightened criteria (Ipopt's defaults are 1e-6 and a
+// 1e-2 constraint violation): 1e-8 in the scaled error moves T by ~1e-8 relative.
+constexpr double kAcceptableTolerance = 1e-8;
+constexpr double kAcceptableConstraintViolation = 1e-8;
+constexpr double kAcceptableComplementarity = 1e-8;
+constexpr double kAcceptableDualInfeasibility = 1e-6;
+constexpr int kAcceptableIterations = 15;
+
+class IpoptTemporalSolver final : public TemporalSolver {
+ public:
+  explicit IpoptTemporalSolver(const IpoptTemporalOptions& options) : options_(options) {}
+
+  TemporalBackend backend() const override { return TemporalBackend::kIpopt; }
+
+  TemporalResult Solve(const TemporalProblem& problem) override {
+    TemporalResult result;
+    result.solver = "ipopt";
+    try {
+      SolveInto(problem, &result);
+    } catch (const std::exception& e) {
+      result.status = TemporalStatus::kNumericalError;
+      result.message = std::string("ipopt backend: unexpected error: ") + e.what();
+    } catch (...) {
+      result.status = TemporalStatus::kNumericalError;
+      result.message = "ipopt backend: unexpected error";
+    }
+    return result;
+  }
+
+ private:
+  // Creates the application once; options never change for this solver.
+  bool EnsureApplication(std::string* error) {
+    if (Ipopt::IsValid(app_)) return true;
+    // No console journal: the library never prints.
+    Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(false);
+    Ipopt::OptionsList& o = *app->Options();
+    bool ok = true;
+    ok &= o.SetIntegerValue("print_level", 0);
+    ok &= o.SetStringValue("sb", "yes");  // no banner
+    ok &= o.SetNumericValue("tol", options_.tolerance);
+    ok &= o.SetIntegerValue("max_iter", options_.max_iterations);
+    ok &= o.SetNumericValue("constr_viol_tol", kConstraintViolationTolerance);
+    ok &= o.SetNumericValue("compl_inf_tol", kComplementarityTolerance);
+    ok &= o.SetNumericValue("acceptable_tol", kAcceptableTolerance);
+    ok &= o.SetNumericValue("acceptable_constr_viol_tol", kAcceptableConstraintViolation);
+    ok &= o.SetNumericValue("acceptable_compl_inf_tol", kAcceptableComplementarity);
+    ok &= o.SetNumericValue("acceptable_dual_inf_tol", kAcceptableDualInfeasibility);
+    ok &= o.SetIntegerValue("acceptable_iter", kAcceptableIterations);
+    ok &= o.SetStringValue("linear_solver", "mumps");
+    // No MC64/MUMPS scaling: faster on this well-scaled banded KKT system (DESIGN.md).
+    ok &= o.SetIntegerValue("mumps_permuting_scaling", 0);
+    ok &= o.SetIntegerValue("mumps_scaling", 0);
+    ok &= o.SetStringValue("hessian_approximation", "exact");
+    // Keep x >= 0 exactly (Ipopt relaxes bounds by 1e-8 by default): sqrt(b) stays defined at
+    // every point Ipopt evaluates.
+    ok &= o.SetNumericValue("bound_relax_factor", 0.0);
+    // Linear rows: their Jacobian is evaluated once.
+    ok &= o.SetStringValue("jac_c_constant", "yes");
+    ok &= o.SetStringValue("jac_d_constant", "yes");
+    ok &= o.SetNumericValue("nlp_lower_bound_inf", -1e19);
+    ok &= o.SetNumericValue("nlp_upper_bound_inf", 1e19);
+    if (!ok) {
+      *error = "Ipopt rejected an option";
+      return false;
+    }
+    // Options come only from the calls above, never from an ipopt.opt file in the working
+    // directory: initialize from an empty stream.
+    std::istringstream no_options_file;
+    const Ipopt::ApplicationReturnStatus init = app->Initialize(no_options_file);
+    if (init != Ipopt::Solve_Succeeded) {
+      *error = std::string("Ipopt initialization failed: ") + ToString(init);
+      return false;
+    }
+    app_ = app;
+    return true;
+  }
+
+  void SolveInto(const TemporalProblem& problem, TemporalResult* result) {
+    if (!std::isfinite(options_.tolerance) || !(options_.tolerance > 0.0)) {
+      result->status = TemporalStatus::kInvalidInput;
+      result->message = "IpoptTemporalOptions.tolerance: expected a positive finite number";
+      return;
+    }
+    if (options_.max_iterations < 0) {
+      result->status = TemporalStatus::kInvalidInput;
+      result->message = "IpoptTemporalOptions.max_iterations: expected a number >= 0, got " +
+                        std::to_string(options_.max_iterations);
+      return;
+    }
+    const Clock::time_point build_start = Clock::now();
+    TemporalDiscretization d;
+    try {
+      d = Discretize(problem);
+    } catch (const std::invalid_argument& e) {
+      result->status = TemporalStatus::kInvalidInput;
+      result->message = e.what();
+      result->build_time_seconds = Seconds(build_start, Clock::now());
+      return;
+    }
+    result->joints = d.joints;
+    if (d.infeasible_reason) {
+      result->status = TemporalStatus::kInfeasible;
+      result->message = *d.infeasible_reason;
+      result->build_time_seconds = Seconds(build_start, Clock::now());
+      return;
+    }
+    if (d.num_vars == 0) {
+      // Every grid value is fixed and presolve checked every row: nothing to optimize.
+      result->build_time_seconds = Seconds(build_start, Clock::now());
+      result->status = TemporalStatus::kOptimal;
+      FinishOptimalResult(problem, d, std::vector<double>(), result);
+      return;
+    }
+    Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
+    std::string error;
+    if (!EnsureApplication(&error)) {
+      result->status = TemporalStatus::kNumericalError;
+      result->message = error;
+      result->build_time_seconds = Seconds(build_start, Clock::now());
+      return;
+    }
+    result->build_time_seconds = Seconds(build_start, Clock::now());
+
+    const Clock::time_point solve_start = Clock::now();
+    const Ipopt::ApplicationReturnStatus status =
+        app_->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(nlp)));
+    result->solve_time_seconds = Seconds(solve_start, Clock::now());
+    Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app_->Statistics();
+    if (Ipopt::IsValid(stats)) result->iterations = stats->IterationCount();
+
+    const std::vector<double>& x = nlp->solution();
+    switch (status) {
+      case Ipopt::Solve_Succeeded:
+      case Ipopt::Solved_To_Acceptable_Level:
+        if (static_cast<int>(x.size()) != d.num_vars) {
+          result->status = TemporalStatus::kNumericalError;
+          result->message = std::string("Ipopt returned ") + ToString(status) +
+                            " without a solution";
+          return;
+        }
+        result->status = TemporalStatus::kOptimal;
+        if (status == Ipopt::Solved_To_Acceptable_Level) {
+          result->message = "Ipopt: solved to the acceptable level";
+        }
+        FinishOptimalResult(problem, d, x, result);
+        return;
+      case Ipopt::Infeasible_Problem_Detected:
+        // The rows and bounds are linear, so a point of local infeasibility is a global one.
+        result->status = TemporalStatus::kInfeasible;
+        result->message = "Ipopt: the limits cannot be met (converged to a point of local "
+                          "infeasibility of the linear rows)";
+        return;
+      case Ipopt::Maximum_Iterations_Exceeded:
+        result->status = TemporalStatus::kIterationLimit;
+        result->message = "Ipopt: maximum number of iterations (" +
+                          std::to_string(options_.max_iterations) + ") exceeded";
+        return;
+      default:
+        result->status = TemporalStatus::kNumericalError;
+        result->message = std::string("Ipopt failed: ") + ToString(status);
+        return;
+    }
+  }
+
+  IpoptTemporalOptions options_;
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app_;
+};
+
+}  // namespace
+
+std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options) {
+  return std::make_unique<IpoptTemporalSolver>(options);
+}
+
+}  // namespace timeopt
