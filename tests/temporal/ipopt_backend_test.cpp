@@ -113,6 +113,39 @@ Eigen::MatrixXd DenseHessian(IpoptTemporalNlp& nlp, const std::vector<double>& x
 // catches any wrong term (a wrong factor or sign changes entries by O(1) relative).
 constexpr double kFiniteDifferenceTolerance = 1e-6;
 
+// Checks the NLP's objective, gradient and Hessian (lower triangle, no duplicates, constraint
+// multipliers ignored, scaled by obj_factor) at x against central differences.
+void ExpectDerivativesMatchFiniteDifferences(const TemporalDiscretization& d,
+                                             const std::vector<double>& x) {
+  IpoptTemporalNlp nlp(d);
+  const int n = d.num_vars;
+  ASSERT_EQ(static_cast<int>(x.size()), n);
+  // The objective is the discretization's own (same sums up to rounding: 1e-12 relative).
+  EXPECT_NEAR(Objective(nlp, x), d.Objective(x), 1e-12 * d.Objective(x));
+
+  const std::vector<double> g = Gradient(nlp, x);
+  std::vector<double> g_fd(static_cast<size_t>(n));
+  Eigen::MatrixXd h_fd(n, n);
+  for (int v = 0; v < n; ++v) {
+    const double step = 1e-6 * std::max(1.0, std::abs(x[v]));
+    std::vector<double> xp = x, xm = x;
+    xp[v] += step;
+    xm[v] -= step;
+    g_fd[v] = (Objective(nlp, xp) - Objective(nlp, xm)) / (2.0 * step);
+    const std::vector<double> gp = Gradient(nlp, xp), gm = Gradient(nlp, xm);
+    for (int w = 0; w < n; ++w) h_fd(w, v) = (gp[w] - gm[w]) / (2.0 * step);
+  }
+  double g_scale = 0.0;
+  for (double v : g_fd) g_scale = std::max(g_scale, std::abs(v));
+  for (int v = 0; v < n; ++v) {
+    EXPECT_NEAR(g[v], g_fd[v], kFiniteDifferenceTolerance * g_scale) << "var " << v;
+  }
+  const double obj_factor = 0.75;
+  const Eigen::MatrixXd h = DenseHessian(nlp, x, obj_factor);
+  const double h_scale = h_fd.cwiseAbs().maxCoeff();
+  EXPECT_LT((h - obj_factor * h_fd).cwiseAbs().maxCoeff(), kFiniteDifferenceTolerance * h_scale);
+}
+
 TEST(IpoptTemporalNlp, GradientAndHessianMatchFiniteDifferences) {
   std::mt19937 rng(7);
   for (double rho : {0.0, 0.7}) {
@@ -126,38 +159,27 @@ TEST(IpoptTemporalNlp, GradientAndHessianMatchFiniteDifferences) {
     EXPECT_GT(d.grid.front().fixed, 0.0);
     EXPECT_LT(d.grid.front().var, 0);
     EXPECT_LT(d.grid.back().var, 0);
-    IpoptTemporalNlp nlp(d);
-    const int n = d.num_vars;
     std::uniform_real_distribution<double> u(0.02, 0.2);
-    std::vector<double> x(static_cast<size_t>(n));
+    std::vector<double> x(static_cast<size_t>(d.num_vars));
     for (double& v : x) v = u(rng);
-
-    // The objective is the discretization's own.
-    EXPECT_NEAR(Objective(nlp, x), d.Objective(x), 1e-12 * d.Objective(x));
-
-    const std::vector<double> g = Gradient(nlp, x);
-    std::vector<double> g_fd(static_cast<size_t>(n));
-    Eigen::MatrixXd h_fd(n, n);
-    for (int v = 0; v < n; ++v) {
-      const double step = 1e-6 * std::max(1.0, std::abs(x[v]));
-      std::vector<double> xp = x, xm = x;
-      xp[v] += step;
-      xm[v] -= step;
-      g_fd[v] = (Objective(nlp, xp) - Objective(nlp, xm)) / (2.0 * step);
-      const std::vector<double> gp = Gradient(nlp, xp), gm = Gradient(nlp, xm);
-      for (int w = 0; w < n; ++w) h_fd(w, v) = (gp[w] - gm[w]) / (2.0 * step);
-    }
-    double g_scale = 0.0;
-    for (double v : g_fd) g_scale = std::max(g_scale, std::abs(v));
-    for (int v = 0; v < n; ++v) {
-      EXPECT_NEAR(g[v], g_fd[v], kFiniteDifferenceTolerance * g_scale) << "var " << v;
-    }
-    const double obj_factor = 0.75;
-    const Eigen::MatrixXd h = DenseHessian(nlp, x, obj_factor);
-    const double h_scale = h_fd.cwiseAbs().maxCoeff();
-    EXPECT_LT((h - obj_factor * h_fd).cwiseAbs().maxCoeff(),
-              kFiniteDifferenceTolerance * h_scale);
+    ExpectDerivativesMatchFiniteDifferences(d, x);
   }
+}
+
+// A hand-made discretization where both ends of one cell are the same variable (with different
+// scales), next to a fixed b = 0: the cell's cross term lands on a diagonal entry twice.
+TEST(IpoptTemporalNlp, CellWithBothEndsOnOneVariable) {
+  TemporalDiscretization d;
+  d.num_pieces = 1;
+  d.cells_per_piece = 3;
+  d.rho = 0.4;
+  d.num_vars = 2;
+  d.grid = {GridValue{0, 1.0, 0.0}, GridValue{0, 2.5, 0.0}, GridValue{1, 0.5, 0.0},
+            GridValue{-1, 1.0, 0.0}};
+  d.cells = {Cell{0, 0, 1.0 / 3}, Cell{0, 1, 1.0 / 3}, Cell{0, 2, 1.0 / 3}};
+  d.var_upper = {std::numeric_limits<double>::infinity(), 1.0};
+  ExpectDerivativesMatchFiniteDifferences(d, {0.3, 0.7});
+  ExpectDerivativesMatchFiniteDifferences(d, {0.05, 0.02});
 }
 
 // The Jacobian is the rows' coefficients and eval_g is J x (exact for linear rows up to
