@@ -301,7 +301,8 @@ TEST(IpoptBackend, RandomCurveSolutionIsFeasible) {
 TEST(IpoptBackend, InfeasibleProblemsAreReportedAsInfeasible) {
   auto solver = MakeIpoptTemporalSolver();
   {
-    // A start speed of 3 along the tangent with vmax = 2: presolve proves it.
+    // A start speed of 3 along the tangent with vmax = 2. (Presolve should prove it from the
+    // constant velocity row; with amax = 1 the first cell's acceleration row proves it too.)
     TemporalProblem p = LineProblem(10.0, 20);
     p.boundary.start_velocity = Eigen::Vector3d(3.0, 0.0, 0.0);
     const TemporalResult r = solver->Solve(p);
