@@ -92,7 +92,10 @@ class RowBuilder {
     std::vector<std::pair<int, double>> kept;
     for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
     if (kept.empty()) {
-      const double scale = std::max({1.0, std::abs(lower), std::abs(upper)});
+      // Scale the slack by the finite bounds only (an infinite one would disable the check).
+      double scale = 1.0;
+      if (std::isfinite(lower)) scale = std::max(scale, std::abs(lower));
+      if (std::isfinite(upper)) scale = std::max(scale, std::abs(upper));
       if ((std::isfinite(lower) && constant_ < lower - kConstantRowSlack * scale) ||
           (std::isfinite(upper) && constant_ > upper + kConstantRowSlack * scale)) {
         if (!d_.infeasible_reason) {
@@ -242,6 +245,8 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         if (j.type == JointType::kStop) {
           g = GridValue{};
         } else {
+          // The last point of a piece that ends at a non-stop joint is always free (see below).
+          if (prev.var < 0) throw std::logic_error("Discretize: fixed value before a G1 joint");
           g = prev;
           g.scale = prev.scale * j.speed_ratio * j.speed_ratio;
         }
@@ -267,7 +272,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       std::ostringstream ss;
       ss << "piece " << c.piece << " must start and end at rest (zero speed at both ends of a "
          << "single cell): it cannot be traversed with K = " << K << "; use K >= 2";
-      d.infeasible_reason = ss.str();
+      if (!d.infeasible_reason) d.infeasible_reason = ss.str();
     }
   }
 

@@ -18,7 +18,7 @@
 namespace timeopt {
 
 // Readable parameter names in test output.
-void PrintTo(TemporalBackend backend, std::ostream* os) { *os << ToString(backend); }
+inline void PrintTo(TemporalBackend backend, std::ostream* os) { *os << ToString(backend); }
 
 namespace {
 
@@ -138,6 +138,15 @@ TEST_P(BothBackends, InfeasibleProblemsAreReportedAsInfeasible) {
   TemporalProblem fast = LineProblem(10.0, 20);
   fast.boundary.start_velocity = Eigen::Vector3d(3.0, 0, 0);  // above vmax = 2
   EXPECT_EQ(Solve(fast).status, TemporalStatus::kInfeasible);
+
+  // Over-speed at both ends with an acceleration limit that would allow it otherwise: only the
+  // fixed boundary values violate the velocity limit (caught by presolve, not by the rows).
+  TemporalProblem both_fast = LineProblem(10.0, 20);
+  both_fast.limits.max_acceleration.setConstant(100.0);
+  both_fast.boundary.start_velocity = both_fast.boundary.end_velocity = Eigen::Vector3d(3.0, 0, 0);
+  EXPECT_EQ(Solve(both_fast).status, TemporalStatus::kInfeasible);
+  both_fast.constraint_mode = ConstraintMode::kCertified;
+  EXPECT_EQ(Solve(both_fast).status, TemporalStatus::kInfeasible);
 
   // Start with acceleration 1 m/s^2 along the line and stop with 0, while the acceleration may
   // change by only 1e-4 per cell: over 20 cells it cannot move by more than 2e-3, and a rest-to-rest

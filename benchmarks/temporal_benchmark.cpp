@@ -1,0 +1,112 @@
+// Temporal stage benchmarks (issue 4): SOCP vs Ipopt over m in {5, 10, 20} pieces and K in
+// {30, 50, 100} cells per piece, and SOCP time against the number of cells N = m K from 100 to
+// 20,000 with its log-log slope. Curves: natural cubic splines through a seeded random walk,
+// vmax = 3 m/s, amax = 2 m/s^2 per axis, rest to rest, rho = 0, paper constraints.
+// Run: ./build/temporal_benchmark --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace {
+
+using namespace timeopt;
+
+TemporalProblem MakeProblem(int pieces, int K, ConstraintMode mode = ConstraintMode::kPaper) {
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  Waypoints w(3, pieces + 1);
+  w.col(0).setZero();
+  for (int i = 1; i <= pieces; ++i) w.col(i) = w.col(i - 1) + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng));
+  TemporalProblem p;
+  p.curve = NaturalCubicSpline(w);
+  p.limits.max_velocity.setConstant(3.0);
+  p.limits.max_acceleration.setConstant(2.0);
+  p.cells_per_piece = K;
+  p.constraint_mode = mode;
+  return p;
+}
+
+void Run(benchmark::State& state, TemporalBackend backend, ConstraintMode mode) {
+  const TemporalProblem p = MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), mode);
+  auto solver = MakeTemporalSolver(backend);
+  TemporalResult r;
+  for (auto _ : state) {
+    r = solver->Solve(p);
+    benchmark::DoNotOptimize(r.total_time);
+  }
+  if (!r.is_success()) state.SkipWithError(r.message.c_str());
+  state.counters["T_s"] = r.total_time;
+  state.counters["iterations"] = r.iterations;
+  state.counters["cells"] = static_cast<double>(state.range(0) * state.range(1));
+  state.counters["solver_ms"] = r.solve_time_seconds * 1e3;
+  state.counters["build_ms"] = r.build_time_seconds * 1e3;
+  state.counters["max_acc_ratio"] = r.max_acceleration_ratio;
+}
+
+void BM_Socp(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper); }
+void BM_Ipopt(benchmark::State& s) { Run(s, TemporalBackend::kIpopt, ConstraintMode::kPaper); }
+void BM_SocpCertified(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kCertified); }
+
+void Grid(benchmark::internal::Benchmark* b) {
+  for (int m : {5, 10, 20}) for (int K : {30, 50, 100}) b->Args({m, K});
+  b->Unit(benchmark::kMillisecond);
+}
+BENCHMARK(BM_Socp)->Apply(Grid);
+BENCHMARK(BM_SocpCertified)->Apply(Grid);
+BENCHMARK(BM_Ipopt)->Apply(Grid);
+
+// Scaling in N = m K with K = 50 fixed (m = 2 .. 400).
+void BM_SocpScaling(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper); }
+BENCHMARK(BM_SocpScaling)
+    ->Args({2, 50})->Args({5, 50})->Args({20, 50})->Args({50, 50})->Args({100, 50})
+    ->Args({200, 50})->Args({400, 50})
+    ->Unit(benchmark::kMillisecond);
+
+// Collects the scaling runs to print the log-log slope of time against N after the table.
+class SlopeReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& r : runs) {
+      if (r.benchmark_name().rfind("BM_SocpScaling", 0) == 0 && !r.error_occurred &&
+          (r.run_type == Run::RT_Iteration ? r.repetitions <= 1 : r.aggregate_name == "median")) {
+        const auto it = r.counters.find("cells");
+        if (it != r.counters.end()) times_[it->second.value] = r.GetAdjustedRealTime();
+      }
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  void Finalize() override {
+    ConsoleReporter::Finalize();
+    if (times_.size() < 2) return;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    const double n = static_cast<double>(times_.size());
+    for (const auto& [cells, t] : times_) {
+      const double x = std::log(cells), y = std::log(t);
+      sx += x; sy += y; sxx += x * x; sxy += x * y;
+    }
+    const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    GetOutputStream() << "log-log slope of SOCP time against cells (" << times_.begin()->first
+                      << " .. " << times_.rbegin()->first << "): " << slope << "\n";
+  }
+
+ private:
+  std::map<double, double> times_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  SlopeReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  benchmark::Shutdown();
+  return 0;
+}

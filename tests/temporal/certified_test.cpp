@@ -1,0 +1,94 @@
+// The "certified" constraint mode (issue 8): limits that hold on the whole trajectory.
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+inline void PrintTo(TemporalBackend backend, std::ostream* os) { *os << ToString(backend); }
+
+namespace {
+
+Waypoints Walk(std::mt19937& rng, int count) {
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  Waypoints w(3, count);
+  w.col(0).setZero();
+  for (int i = 1; i < count; ++i) w.col(i) = w.col(i - 1) + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng));
+  return w;
+}
+
+TemporalProblem Problem(const PiecewiseCurve& curve, int K, ConstraintMode mode) {
+  TemporalProblem p;
+  p.curve = curve;
+  p.limits.max_velocity = Eigen::Vector3d(3.0, 3.0, 2.0);
+  p.limits.max_acceleration = Eigen::Vector3d(2.0, 2.0, 1.5);
+  p.cells_per_piece = K;
+  p.constraint_mode = mode;
+  return p;
+}
+
+class Certified : public ::testing::TestWithParam<TemporalBackend> {
+ protected:
+  TemporalResult Solve(const TemporalProblem& p) { return MakeTemporalSolver(GetParam())->Solve(p); }
+};
+
+INSTANTIATE_TEST_SUITE_P(Temporal, Certified,
+                         ::testing::Values(TemporalBackend::kSocp, TemporalBackend::kIpopt),
+                         [](const auto& info) { return std::string(ToString(info.param)); });
+
+// The dense check samples the exact trajectory 33 times per cell. In certified mode every
+// Bernstein coefficient is within the limit, so the polynomial is everywhere; the solvers meet
+// their rows to ~1e-10 relative, hence 1 + 1e-9.
+TEST_P(Certified, DenseCheckFindsNoViolation) {
+  std::mt19937 rng(77);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Waypoints w = Walk(rng, 5);
+    for (const PiecewiseCurve& curve :
+         {NaturalCubicSpline(w), MinimumJerkSpline(w), MinimumJerkSpline(w, EndDerivatives{})}) {
+      const TemporalResult r = Solve(Problem(curve, 30, ConstraintMode::kCertified));
+      ASSERT_TRUE(r.is_success()) << r.message;
+      EXPECT_LE(r.max_velocity_ratio, 1.0 + 1e-9);
+      EXPECT_LE(r.max_acceleration_ratio, 1.0 + 1e-9);
+    }
+  }
+}
+
+// The paper's rows are a subset of what certified mode enforces at the same points (the cell-end
+// Bernstein coefficients are the grid values; the mid-cell acceleration is a convex combination of
+// the coefficients), so certified T >= paper T; both converge to the continuous optimum as K grows.
+TEST_P(Certified, CostsLittleAndTheGapShrinksWithK) {
+  std::mt19937 rng(5);
+  const PiecewiseCurve curve = NaturalCubicSpline(Walk(rng, 7));
+  double previous_gap = 1e9;
+  for (int K : {10, 40, 160}) {
+    const TemporalResult paper = Solve(Problem(curve, K, ConstraintMode::kPaper));
+    const TemporalResult cert = Solve(Problem(curve, K, ConstraintMode::kCertified));
+    ASSERT_TRUE(paper.is_success()) << paper.message;
+    ASSERT_TRUE(cert.is_success()) << cert.message;
+    const double gap = (cert.total_time - paper.total_time) / paper.total_time;
+    EXPECT_GE(gap, -1e-8) << "K=" << K;  // solver tolerance ~1e-9 relative on each T
+    EXPECT_LT(gap, previous_gap) << "K=" << K;
+    previous_gap = gap;
+  }
+  EXPECT_LT(previous_gap, 5e-3);  // at K = 160 the price of certainty is below 0.5%
+}
+
+// On a straight line f'' = 0 and f' is constant, so certified rows coincide with the paper's and
+// the closed form T = L/v + v/a = 7 is reproduced (switch points on the grid for K multiple of 5).
+TEST_P(Certified, StraightLineMatchesClosedForm) {
+  PolynomialPiece::Coefficients c(3, 2);
+  c << 0, 10, 0, 0, 0, 0;
+  TemporalProblem p = Problem(PiecewiseCurve({PolynomialPiece(c)}), 20, ConstraintMode::kCertified);
+  p.limits.max_velocity.setConstant(2.0);
+  p.limits.max_acceleration.setConstant(1.0);
+  const TemporalResult r = Solve(p);
+  ASSERT_TRUE(r.is_success()) << r.message;
+  EXPECT_NEAR(r.total_time, 7.0, 7e-7);
+}
+
+}  // namespace
+}  // namespace timeopt
