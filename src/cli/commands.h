@@ -20,5 +20,6 @@ using Runner = std::function<int()>;
 void RegisterCurveCommand(CLI::App& app, Runner& run);
 void RegisterTemporalCommand(CLI::App& app, Runner& run);
 void RegisterWaypointsCommand(CLI::App& app, Runner& run);
+void RegisterMapCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

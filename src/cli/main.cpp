@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   RegisterCurveCommand(app, run);
   RegisterTemporalCommand(app, run);
   RegisterWaypointsCommand(app, run);
+  RegisterMapCommand(app, run);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,450 @@
+#include "timeopt/map/occupancy_map.h"
+
+// OctoMap's debug macros print to stderr in builds without NDEBUG; the library never prints, so
+// they are silenced for the OctoMap templates instantiated here.
+#include <octomap/octomap_types.h>
+#undef OCTOMAP_DEBUG
+#define OCTOMAP_DEBUG(...) (void)0
+#undef OCTOMAP_DEBUG_STR
+#define OCTOMAP_DEBUG_STR(...) (void)0
+
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <iterator>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "timeopt/io/errors.h"
+
+namespace timeopt {
+namespace {
+
+// OctoMap's tree depth and key offset: key = index + 32768, 16 levels below the root.
+constexpr int kTreeDepth = 16;
+constexpr int kKeyOffset = 32768;
+
+constexpr const char* kBinaryFirstLine = "# Octomap OcTree binary file";
+constexpr const char* kFullFirstLine = "# Octomap OcTree file";
+
+struct FileHeader {
+  bool binary = false;
+  std::string id;
+  int64_t size = -1;
+  double resolution = 0.0;
+  size_t data_offset = 0;  // first byte after the "data" line
+};
+
+std::string StripCarriageReturn(std::string line) {
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  return line;
+}
+
+// Parses the text header of a .bt / .ot file as OctoMap writes it (first line, comment lines,
+// "id", "size", "res", then "data").
+FileHeader ParseHeader(const std::string& content, const std::string& path) {
+  FileHeader header;
+  size_t pos = 0;
+  auto next_line = [&](std::string* line) {
+    if (pos >= content.size()) return false;
+    const size_t end = content.find('\n', pos);
+    if (end == std::string::npos) {
+      *line = content.substr(pos);
+      pos = content.size();
+    } else {
+      *line = content.substr(pos, end - pos);
+      pos = end + 1;
+    }
+    return true;
+  };
+  std::string line;
+  if (!next_line(&line)) throw std::invalid_argument("map file '" + path + "' is empty");
+  line = StripCarriageReturn(line);
+  if (line == kBinaryFirstLine) {
+    header.binary = true;
+  } else if (line == kFullFirstLine) {
+    header.binary = false;
+  } else {
+    throw std::invalid_argument("'" + path + "' is not an OctoMap file (first line is not '" +
+                                kBinaryFirstLine + "' or '" + kFullFirstLine + "')");
+  }
+  bool have_data = false;
+  while (next_line(&line)) {
+    line = StripCarriageReturn(line);
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream tokens(line);
+    std::string key;
+    tokens >> key;
+    if (key == "data") {
+      have_data = true;
+      break;
+    }
+    if (key == "id") {
+      tokens >> header.id;
+    } else if (key == "size") {
+      tokens >> header.size;
+    } else if (key == "res") {
+      tokens >> header.resolution;
+    } else {
+      throw std::invalid_argument("'" + path + "': unknown header line '" + line + "'");
+    }
+    if (tokens.fail()) throw std::invalid_argument("'" + path + "': bad header line '" + line + "'");
+  }
+  if (!have_data) throw std::invalid_argument("'" + path + "': header has no 'data' line");
+  if (header.id.empty()) throw std::invalid_argument("'" + path + "': header has no 'id'");
+  if (header.size < 0) throw std::invalid_argument("'" + path + "': header has no valid 'size'");
+  if (!(header.resolution > 0.0) || !std::isfinite(header.resolution)) {
+    throw std::invalid_argument("'" + path + "': header has no positive 'res'");
+  }
+  header.data_offset = pos;
+  return header;
+}
+
+// Walks a node stream without building anything, checking that it is complete, that no node is
+// deeper than the tree depth and (by the returned count) how many nodes it holds. OctoMap's own
+// readers trust the stream and recurse without bound on corrupt data.
+class StreamChecker {
+ public:
+  StreamChecker(const std::string& content, size_t offset, size_t node_bytes)
+      : content_(content), pos_(offset), node_bytes_(node_bytes) {}
+
+  // .bt: per inner node two bytes, 2 bits per child (01 occupied leaf, 10 free leaf, 11 inner).
+  bool CheckBinaryNode(int depth) {
+    if (pos_ + 2 > content_.size()) return Fail("data ends early (truncated file)");
+    const auto low = static_cast<unsigned char>(content_[pos_]);
+    const auto high = static_cast<unsigned char>(content_[pos_ + 1]);
+    pos_ += 2;
+    int inner_children = 0;
+    for (int child = 0; child < 8; ++child) {
+      const unsigned bits = ((child < 4 ? low : high) >> (2 * (child % 4))) & 3u;
+      if (bits == 0) continue;
+      ++count_;
+      if (bits == 3) ++inner_children;
+    }
+    if (inner_children > 0 && depth + 1 >= kTreeDepth) {
+      return Fail("node deeper than the tree depth 16 (corrupt data)");
+    }
+    for (int i = 0; i < inner_children; ++i) {
+      if (!CheckBinaryNode(depth + 1)) return false;
+    }
+    return true;
+  }
+
+  // .ot: per node its data (node_bytes_), then one byte with a bit per existing child.
+  bool CheckFullNode(int depth) {
+    if (pos_ + node_bytes_ + 1 > content_.size()) return Fail("data ends early (truncated file)");
+    float value;
+    std::memcpy(&value, content_.data() + pos_, sizeof(float));
+    if (!std::isfinite(value)) return Fail("node with a non-finite occupancy value");
+    pos_ += node_bytes_;
+    const auto children = static_cast<unsigned char>(content_[pos_]);
+    pos_ += 1;
+    ++count_;
+    if (children != 0 && depth >= kTreeDepth) {
+      return Fail("node deeper than the tree depth 16 (corrupt data)");
+    }
+    for (int child = 0; child < 8; ++child) {
+      if ((children >> child) & 1u) {
+        if (!CheckFullNode(depth + 1)) return false;
+      }
+    }
+    return true;
+  }
+
+  int64_t count() const { return count_; }
+  size_t position() const { return pos_; }
+  const std::string& error() const { return error_; }
+  void set_count(int64_t count) { count_ = count; }
+
+ private:
+  bool Fail(const std::string& message) {
+    error_ = message;
+    return false;
+  }
+
+  const std::string& content_;
+  size_t pos_;
+  size_t node_bytes_;
+  int64_t count_ = 0;
+  std::string error_;
+};
+
+std::string ReadWholeFile(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw FileError("cannot open map file '" + path + "'");
+  std::string content((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (file.bad()) throw FileError("cannot read map file '" + path + "'");
+  return content;
+}
+
+Eigen::Vector3i IndexFromKey(const octomap::OcTreeKey& key) {
+  return Eigen::Vector3i(key[0] - kKeyOffset, key[1] - kKeyOffset, key[2] - kKeyOffset);
+}
+
+}  // namespace
+
+struct OccupancyMap::Impl {
+  explicit Impl(double resolution) : tree(resolution) {}
+  Impl(const Impl& other) : tree(other.tree) {}
+  octomap::OcTree tree;
+};
+
+OccupancyMap::OccupancyMap(double resolution, UnknownSpace unknown) : unknown_(unknown) {
+  if (!(resolution > 0.0) || !std::isfinite(resolution)) {
+    throw std::invalid_argument("map resolution must be positive and finite");
+  }
+  impl_ = std::make_unique<Impl>(resolution);
+}
+
+OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl, UnknownSpace unknown,
+                           std::string source_type)
+    : impl_(std::move(impl)), unknown_(unknown), source_type_(std::move(source_type)) {}
+
+OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
+OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
+
+OccupancyMap::OccupancyMap(const OccupancyMap& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)),
+      unknown_(other.unknown_),
+      source_type_(other.source_type_) {}
+
+OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
+  if (this != &other) *this = OccupancyMap(other);
+  return *this;
+}
+
+OccupancyMap OccupancyMap::Load(const std::string& path, UnknownSpace unknown) {
+  const std::string content = ReadWholeFile(path);
+  const FileHeader header = ParseHeader(content, path);
+  auto impl = std::make_unique<Impl>(header.resolution);
+  std::string source_type = "OcTree";
+
+  if (header.binary) {
+    // Every occupancy tree type writes the same binary stream; only the bits are read.
+    StreamChecker checker(content, header.data_offset, 0);
+    if (header.size > 0) {
+      checker.set_count(1);  // the root
+      if (!checker.CheckBinaryNode(0)) {
+        throw std::invalid_argument("'" + path + "': " + checker.error());
+      }
+    }
+    if (checker.count() != header.size) {
+      throw std::invalid_argument("'" + path + "': header says " + std::to_string(header.size) +
+                                  " nodes, the data holds " + std::to_string(checker.count()));
+    }
+    if (header.size > 0) {
+      std::istringstream stream(content);
+      stream.seekg(static_cast<std::streamoff>(header.data_offset));
+      impl->tree.readBinaryData(stream);
+    }
+    if (header.id != "OcTree") source_type = header.id;
+  } else {
+    size_t node_bytes = 0;
+    if (header.id == "OcTree") {
+      node_bytes = sizeof(float);
+    } else if (header.id == "ColorOcTree") {
+      node_bytes = sizeof(float) + sizeof(octomap::ColorOcTreeNode::Color);
+    } else {
+      throw std::invalid_argument("'" + path + "': unsupported tree type '" + header.id +
+                                  "' (OcTree and ColorOcTree are supported)");
+    }
+    StreamChecker checker(content, header.data_offset, node_bytes);
+    if (header.size > 0 && !checker.CheckFullNode(0)) {
+      throw std::invalid_argument("'" + path + "': " + checker.error());
+    }
+    if (checker.count() != header.size) {
+      throw std::invalid_argument("'" + path + "': header says " + std::to_string(header.size) +
+                                  " nodes, the data holds " + std::to_string(checker.count()));
+    }
+    if (header.size > 0) {
+      std::istringstream stream(content);
+      stream.seekg(static_cast<std::streamoff>(header.data_offset));
+      if (header.id == "OcTree") {
+        impl->tree.readData(stream);
+      } else {
+        octomap::ColorOcTree color_tree(header.resolution);
+        color_tree.readData(stream);
+        // Occupancy only: through OctoMap's binary stream (same resolution, thresholded).
+        std::stringstream bits;
+        color_tree.writeBinaryData(bits);
+        impl->tree.readBinaryData(bits);
+        source_type = "ColorOcTree";
+      }
+    }
+  }
+  return OccupancyMap(std::move(impl), unknown, source_type);
+}
+
+OccupancyMap OccupancyMap::FromGrid(const OccupancyGrid& grid, UnknownSpace unknown) {
+  grid.Validate();
+  OccupancyMap map(grid.resolution, unknown);
+  octomap::OcTree& tree = map.impl_->tree;
+  const float occupied_value = tree.getClampingThresMaxLog();
+  const float free_value = tree.getClampingThresMinLog();
+  const Eigen::Vector3i lo = grid.box.min.array() + kKeyOffset;
+  const Eigen::Vector3i hi = grid.box.end().array() + kKeyOffset;  // exclusive
+  if ((lo.array() < 0).any() || (hi.array() > 2 * kKeyOffset).any()) {
+    throw std::invalid_argument("grid box leaves the OctoMap key range");
+  }
+  // Depth-first over aligned cubes in OctoMap's child order (Morton order): a node's children
+  // are complete before its sibling starts, so setNodeValue's pruning keeps the tree small.
+  auto fill = [&](auto&& self, const Eigen::Vector3i& corner, int level) -> void {
+    const int size = 1 << level;
+    if ((corner.array() >= hi.array()).any() || (corner.array() + size <= lo.array()).any()) {
+      return;
+    }
+    if (level == 0) {
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(corner.x()),
+                                   static_cast<octomap::key_type>(corner.y()),
+                                   static_cast<octomap::key_type>(corner.z()));
+      const bool occupied = grid.At(corner.array() - kKeyOffset);
+      tree.setNodeValue(key, occupied ? occupied_value : free_value);
+      return;
+    }
+    const int half = size / 2;
+    for (int child = 0; child < 8; ++child) {
+      const Eigen::Vector3i offset((child & 1) ? half : 0, (child & 2) ? half : 0,
+                                   (child & 4) ? half : 0);
+      self(self, corner + offset, level - 1);
+    }
+  };
+  fill(fill, Eigen::Vector3i::Zero(), kTreeDepth);
+  return map;
+}
+
+void OccupancyMap::Save(const std::string& path) const {
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw FileError("cannot write map file '" + path + "'");
+  // The header as OctoMap writes it (its own writer prints progress to stderr).
+  file << kBinaryFirstLine << "\n"
+       << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+       << "id OcTree\n"
+       << "size " << impl_->tree.size() << "\n"
+       << "res " << std::setprecision(17) << impl_->tree.getResolution() << "\n"
+       << "data\n";
+  impl_->tree.writeBinaryData(file);
+  file.close();
+  if (!file) throw FileError("cannot write map file '" + path + "'");
+}
+
+double OccupancyMap::resolution() const { return impl_->tree.getResolution(); }
+
+bool OccupancyMap::empty() const { return impl_->tree.size() == 0; }
+
+VoxelBox OccupancyMap::KnownBox() const {
+  const octomap::OcTree& tree = impl_->tree;
+  if (tree.size() == 0) return VoxelBox();
+  Eigen::Vector3i lo = Eigen::Vector3i::Constant(2 * kKeyOffset);
+  Eigen::Vector3i hi = Eigen::Vector3i::Constant(-1);
+  bool any = false;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const Eigen::Vector3i corner = IndexFromKey(it.getIndexKey()).array() + kKeyOffset;
+    const int size = 1 << (kTreeDepth - static_cast<int>(it.getDepth()));
+    lo = lo.cwiseMin(corner);
+    hi = hi.cwiseMax(corner + Eigen::Vector3i::Constant(size));
+    any = true;
+  }
+  if (!any) return VoxelBox();
+  VoxelBox box;
+  box.min = lo.array() - kKeyOffset;
+  box.size = hi - lo;
+  return box;
+}
+
+Eigen::AlignedBox3d OccupancyMap::Bounds() const {
+  const VoxelBox box = KnownBox();
+  if (box.empty()) return Eigen::AlignedBox3d();
+  return box.Metric(resolution());
+}
+
+VoxelState OccupancyMap::State(const Eigen::Vector3d& point) const {
+  const octomap::OcTree& tree = impl_->tree;
+  octomap::OcTreeKey key;
+  if (!tree.coordToKeyChecked(point.x(), point.y(), point.z(), key)) return VoxelState::kUnknown;
+  const octomap::OcTreeNode* node = tree.search(key);
+  if (node == nullptr) return VoxelState::kUnknown;
+  return tree.isNodeOccupied(node) ? VoxelState::kOccupied : VoxelState::kFree;
+}
+
+bool OccupancyMap::IsOccupied(const Eigen::Vector3d& point) const {
+  const VoxelState state = State(point);
+  if (state == VoxelState::kUnknown) return unknown_ == UnknownSpace::kOccupied;
+  return state == VoxelState::kOccupied;
+}
+
+double OccupancyMap::OccupiedVolume() const {
+  const octomap::OcTree& tree = impl_->tree;
+  double volume = 0.0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (tree.isNodeOccupied(*it)) volume += std::pow(it.getSize(), 3);
+  }
+  return volume;
+}
+
+double OccupancyMap::FreeVolume() const {
+  const octomap::OcTree& tree = impl_->tree;
+  double volume = 0.0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) volume += std::pow(it.getSize(), 3);
+  }
+  return volume;
+}
+
+int64_t OccupancyMap::NumLeaves() const {
+  return static_cast<int64_t>(impl_->tree.getNumLeafNodes());
+}
+
+int64_t OccupancyMap::NumNodes() const { return static_cast<int64_t>(impl_->tree.size()); }
+
+OccupancyGrid OccupancyMap::Rasterize(const VoxelBox& box) const {
+  if (box.empty()) throw std::invalid_argument("rasterize: the box is empty (a size is not positive)");
+  const octomap::OcTree& tree = impl_->tree;
+  OccupancyGrid grid(resolution(), box, unknown_ == UnknownSpace::kOccupied);
+  if (tree.size() == 0) return grid;
+  const Eigen::Vector3i lo_key = box.min.array() + kKeyOffset;
+  const Eigen::Vector3i hi_key = box.end().array() + kKeyOffset - 1;  // inclusive
+  if ((lo_key.array() < 0).any() || (hi_key.array() >= 2 * kKeyOffset).any()) {
+    throw std::invalid_argument("rasterize: the box leaves the OctoMap key range");
+  }
+  const octomap::OcTreeKey min_key(static_cast<octomap::key_type>(lo_key.x()),
+                                   static_cast<octomap::key_type>(lo_key.y()),
+                                   static_cast<octomap::key_type>(lo_key.z()));
+  const octomap::OcTreeKey max_key(static_cast<octomap::key_type>(hi_key.x()),
+                                   static_cast<octomap::key_type>(hi_key.y()),
+                                   static_cast<octomap::key_type>(hi_key.z()));
+  const Eigen::Vector3i box_end = box.end();
+  for (auto it = tree.begin_leafs_bbx(min_key, max_key), end = tree.end_leafs_bbx(); it != end;
+       ++it) {
+    const uint8_t value = tree.isNodeOccupied(*it) ? 1 : 0;
+    const Eigen::Vector3i corner = IndexFromKey(it.getIndexKey());
+    const int size = 1 << (kTreeDepth - static_cast<int>(it.getDepth()));
+    const Eigen::Vector3i a = corner.cwiseMax(box.min);
+    const Eigen::Vector3i b = (corner.array() + size).matrix().cwiseMin(box_end);  // exclusive
+    if ((b.array() <= a.array()).any()) continue;
+    for (int z = a.z(); z < b.z(); ++z) {
+      for (int y = a.y(); y < b.y(); ++y) {
+        const int64_t row = grid.Linear(Eigen::Vector3i(a.x(), y, z) - box.min);
+        std::fill_n(grid.occupied.begin() + row, b.x() - a.x(), value);
+      }
+    }
+  }
+  return grid;
+}
+
+void OccupancyMap::SetOccupied(const Eigen::Vector3d& point, bool occupied) {
+  octomap::OcTree& tree = impl_->tree;
+  octomap::OcTreeKey key;
+  if (!point.allFinite() || !tree.coordToKeyChecked(point.x(), point.y(), point.z(), key)) {
+    throw std::invalid_argument("point outside the OctoMap key range");
+  }
+  tree.setNodeValue(key, occupied ? tree.getClampingThresMaxLog() : tree.getClampingThresMinLog());
+}
+
+}  // namespace timeopt

@@ -1,0 +1,232 @@
+#include "timeopt/map/occupancy_map.h"
+
+#include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
+#include <octomap/OcTree.h>
+
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+
+#include "timeopt/io/errors.h"
+#include "timeopt/map/esdf.h"
+#include "timeopt/map/map_generators.h"
+
+namespace timeopt {
+namespace {
+
+std::string TempPath(const std::string& name) { return ::testing::TempDir() + "/map_test_" + name; }
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream file(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+}
+
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream file(path, std::ios::binary);
+  file << bytes;
+}
+
+OccupancyGrid SmallBoxes(uint64_t seed) {
+  RandomBoxesOptions options;
+  options.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(-0.8, -0.4, 0.0), Eigen::Vector3d(1.2, 1.0, 0.9));
+  options.resolution = 0.1;
+  options.count = 6;
+  options.min_size = 0.2;
+  options.max_size = 0.6;
+  options.seed = seed;
+  return GenerateRandomBoxes(options);
+}
+
+TEST(OccupancyMapTest, GridSaveLoadRoundTripKeepsEveryVoxel) {
+  const OccupancyGrid grid = SmallBoxes(2);
+  ASSERT_GT(grid.CountOccupied(), 0);
+  const OccupancyMap map = OccupancyMap::FromGrid(grid);
+  EXPECT_EQ(map.KnownBox().min, grid.box.min);
+  EXPECT_EQ(map.KnownBox().size, grid.box.size);
+  const std::string path = TempPath("roundtrip.bt");
+  map.Save(path);
+  const OccupancyMap loaded = OccupancyMap::Load(path);
+  EXPECT_DOUBLE_EQ(loaded.resolution(), 0.1);
+  EXPECT_EQ(loaded.NumNodes(), map.NumNodes());
+  const OccupancyGrid back = loaded.Rasterize(grid.box);
+  EXPECT_EQ(back.occupied, grid.occupied);
+  // Volumes are sums of voxel cubes: exact up to the rounding of r^3 sums (1e-9 m^3).
+  const double voxel = 0.1 * 0.1 * 0.1;
+  EXPECT_NEAR(loaded.OccupiedVolume(), grid.CountOccupied() * voxel, 1e-9);
+  EXPECT_NEAR(loaded.FreeVolume(), (grid.box.num_voxels() - grid.CountOccupied()) * voxel, 1e-9);
+  // Point queries agree with the grid at voxel centres.
+  for (int64_t i = 0; i < grid.box.num_voxels(); i += 7) {
+    const Eigen::Vector3i local(static_cast<int>(i % grid.box.size.x()),
+                                static_cast<int>((i / grid.box.size.x()) % grid.box.size.y()),
+                                static_cast<int>(i / (int64_t{grid.box.size.x()} * grid.box.size.y())));
+    const Eigen::Vector3i index = local + grid.box.min;
+    EXPECT_EQ(loaded.IsOccupied(grid.Centre(index)), grid.At(index));
+    EXPECT_EQ(loaded.State(grid.Centre(index)),
+              grid.At(index) ? VoxelState::kOccupied : VoxelState::kFree);
+  }
+}
+
+TEST(OccupancyMapTest, UnknownSpaceOptionDecidesUnobservedVoxels) {
+  OccupancyMap map(0.1);
+  map.SetOccupied(Eigen::Vector3d(0.05, 0.05, 0.05), true);
+  map.SetOccupied(Eigen::Vector3d(0.15, 0.05, 0.05), false);
+  VoxelBox box;
+  box.min = Eigen::Vector3i(-1, 0, 0);
+  box.size = Eigen::Vector3i(4, 1, 1);
+  const Eigen::Vector3d unknown_point(0.35, 0.05, 0.05);
+  EXPECT_EQ(map.State(unknown_point), VoxelState::kUnknown);
+  EXPECT_FALSE(map.IsOccupied(unknown_point));
+  EXPECT_EQ(map.Rasterize(box).occupied, (std::vector<uint8_t>{0, 1, 0, 0}));
+  map.set_unknown_space(UnknownSpace::kOccupied);
+  EXPECT_TRUE(map.IsOccupied(unknown_point));
+  EXPECT_EQ(map.Rasterize(box).occupied, (std::vector<uint8_t>{1, 1, 0, 1}));
+  // The ESDF follows the option: with unknown occupied, the free voxel is r/2 from both sides.
+  const Esdf esdf(map.Rasterize(box));
+  EXPECT_NEAR(esdf.VoxelDistance(Eigen::Vector3i(1, 0, 0)), 0.05, 1e-7);  // float storage
+}
+
+TEST(OccupancyMapTest, LoadsFullOtFilesOfOcTreeAndColorOcTree) {
+  octomap::OcTree tree(0.05);
+  octomap::ColorOcTree color_tree(0.05);
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int i = 0; i < 300; ++i) {
+    const octomap::point3d p(unit(rng), unit(rng), unit(rng));
+    const bool occupied = i % 3 == 0;
+    tree.updateNode(p, occupied);
+    color_tree.updateNode(p, occupied)->setColor(255, 0, 0);
+  }
+  const std::string ot = TempPath("tree.ot"), color_ot = TempPath("color.ot");
+  ASSERT_TRUE(tree.write(ot));
+  ASSERT_TRUE(color_tree.write(color_ot));
+  const OccupancyMap a = OccupancyMap::Load(ot);
+  const OccupancyMap b = OccupancyMap::Load(color_ot);
+  EXPECT_EQ(a.source_type(), "OcTree");
+  EXPECT_EQ(b.source_type(), "ColorOcTree");
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const Eigen::Vector3d p(it.getX(), it.getY(), it.getZ());
+    const VoxelState expected =
+        tree.isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kFree;
+    EXPECT_EQ(a.State(p), expected);
+    EXPECT_EQ(b.State(p), expected);
+  }
+  EXPECT_NEAR(a.OccupiedVolume(), b.OccupiedVolume(), 1e-12);
+  EXPECT_GT(a.OccupiedVolume(), 0.0);
+}
+
+void ExpectInvalid(const std::string& path, const std::string& fragment) {
+  try {
+    OccupancyMap::Load(path);
+    ADD_FAILURE() << "no exception for " << path;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+  }
+}
+
+TEST(OccupancyMapTest, CorruptAndTruncatedFilesThrowNeverCrash) {
+  EXPECT_THROW(OccupancyMap::Load(TempPath("does_not_exist.bt")), FileError);
+  const std::string empty = TempPath("empty_file.bt");
+  WriteBytes(empty, "");
+  ExpectInvalid(empty, "empty");
+  const std::string text = TempPath("text.bt");
+  WriteBytes(text, "hello\nworld\n");
+  ExpectInvalid(text, "not an OctoMap file");
+
+  const std::string good = TempPath("good.bt");
+  OccupancyMap::FromGrid(SmallBoxes(3)).Save(good);
+  const std::string bytes = ReadBytes(good);
+  const size_t data = bytes.find("data\n") + 5;
+  ASSERT_LT(data, bytes.size());
+
+  // Every truncation: a clear error, never a crash.
+  const std::string cut = TempPath("cut.bt");
+  for (size_t length = 0; length < bytes.size(); ++length) {
+    WriteBytes(cut, bytes.substr(0, length));
+    EXPECT_THROW(OccupancyMap::Load(cut), std::invalid_argument) << "length " << length;
+  }
+  ExpectInvalid(cut, "truncated");
+
+  // Header lies about the size.
+  std::string wrong_size = bytes;
+  const size_t size_pos = wrong_size.find("size ");
+  wrong_size.insert(size_pos + 5, "9");
+  WriteBytes(cut, wrong_size);
+  ExpectInvalid(cut, "header says");
+  std::string no_res = bytes;
+  no_res.replace(no_res.find("res "), 4, "rez ");
+  WriteBytes(cut, no_res);
+  ExpectInvalid(cut, "unknown header line");
+
+  // Every data byte set to 0xff (all children inner nodes): deeper than 16 levels.
+  std::string deep = bytes;
+  for (size_t i = data; i < deep.size(); ++i) deep[i] = static_cast<char>(0xff);
+  WriteBytes(cut, deep);
+  EXPECT_THROW(OccupancyMap::Load(cut), std::invalid_argument);
+
+  // Random byte corruptions: either a valid tree of the right size or an exception.
+  std::mt19937_64 rng(12);
+  std::uniform_int_distribution<size_t> position(data, bytes.size() - 1);
+  std::uniform_int_distribution<int> value(0, 255);
+  int rejected = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string corrupt = bytes;
+    for (int k = 0; k < 3; ++k) corrupt[position(rng)] = static_cast<char>(value(rng));
+    WriteBytes(cut, corrupt);
+    try {
+      const OccupancyMap map = OccupancyMap::Load(cut);
+      EXPECT_GT(map.NumNodes(), 0);
+    } catch (const std::invalid_argument&) {
+      ++rejected;
+    }
+  }
+  EXPECT_GT(rejected, 0);
+
+  // A full-format file with an unsupported tree type.
+  WriteBytes(cut, "# Octomap OcTree file\nid CountingOcTree\nsize 1\nres 0.1\ndata\n12345");
+  ExpectInvalid(cut, "unsupported tree type");
+}
+
+TEST(OccupancyMapTest, EmptyMapAndZeroSizeBoxGiveClearErrors) {
+  const std::string path = TempPath("empty_map.bt");
+  OccupancyMap(0.1).Save(path);
+  const OccupancyMap map = OccupancyMap::Load(path);
+  EXPECT_TRUE(map.empty());
+  EXPECT_TRUE(map.KnownBox().empty());
+  EXPECT_EQ(map.OccupiedVolume(), 0.0);
+  try {
+    Esdf::FromMap(map);
+    ADD_FAILURE() << "no exception for an empty map";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("empty"), std::string::npos) << e.what();
+  }
+  const Eigen::AlignedBox3d box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  EXPECT_THROW(Esdf::FromMap(map, box), std::invalid_argument);  // no obstacle in the box
+  const OccupancyMap boxes = OccupancyMap::FromGrid(SmallBoxes(5));
+  try {
+    Esdf::FromMap(boxes, Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 1, 0)));
+    ADD_FAILURE() << "no exception for a zero-size box";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("zero"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(OccupancyMap(0.0), std::invalid_argument);
+  EXPECT_THROW(map.Rasterize(VoxelBox()), std::invalid_argument);
+  EXPECT_THROW(OccupancyMap(0.1).Save(TempPath("no_such_dir/x.bt")), FileError);
+}
+
+TEST(OccupancyMapTest, EsdfFromMapEqualsEsdfFromGrid) {
+  const OccupancyGrid grid = SmallBoxes(6);
+  const OccupancyMap map = OccupancyMap::FromGrid(grid);
+  const Esdf from_map = Esdf::FromMap(map);
+  const Esdf from_grid(grid);
+  ASSERT_EQ(from_map.box().min, from_grid.box().min);
+  ASSERT_EQ(from_map.box().size, from_grid.box().size);
+  for (int x = grid.box.min.x(); x < grid.box.end().x(); ++x) {
+    const Eigen::Vector3i index(x, grid.box.min.y() + 2, grid.box.min.z() + 3);
+    EXPECT_EQ(from_map.VoxelDistance(index), from_grid.VoxelDistance(index));
+  }
+}
+
+}  // namespace
+}  // namespace timeopt
