@@ -53,6 +53,11 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!(max_solve_time_in_seconds > 0.0)) return fail("max_solve_time_in_seconds must be positive");
   if (!(step_fraction > 0.0 && step_fraction < 1.0)) return fail("step_fraction must be in (0, 1)");
   if (!(min_step > 0.0 && min_step < 1.0)) return fail("min_step must be in (0, 1)");
+  if (!(reduced_feasibility_tolerance >= feasibility_tolerance)) {
+    return fail("reduced_feasibility_tolerance must be >= feasibility_tolerance");
+  }
+  if (!(reduced_gap_tolerance >= 0.0)) return fail("reduced_gap_tolerance must be >= 0");
+  if (stall_iterations < 1) return fail("stall_iterations must be >= 1");
   if (!(static_regularization >= 0.0 && std::isfinite(static_regularization))) {
     return fail("static_regularization must be >= 0 and finite");
   }
@@ -163,6 +168,7 @@ struct Solver::Workspace {
   Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
   Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, d_s;
   Eigen::VectorXd best_x, best_y, best_z, best_s;
+  double best_tau = 1.0, best_kappa = 1.0;
 
   int refinement_counter = 0;
 
@@ -828,10 +834,12 @@ Result Solver::Solve(const Problem& problem) {
   W.y = W.sol2.segment(n, p);
   W.z = W.sol2.segment(n + p, m);
   {
-    const double alpha_p = -W.MinEigenvalue(W.s.data());
-    if (alpha_p >= 0.0 && m > 0) W.AddIdentity(W.s.data(), 1.0 + alpha_p);
-    const double alpha_d = -W.MinEigenvalue(W.z.data());
-    if (alpha_d >= 0.0 && m > 0) W.AddIdentity(W.z.data(), 1.0 + alpha_d);
+    // Shift both into the cones so that every cone is at least 1 from its boundary (in the sense of
+    // its smallest eigenvalue): a cone that starts barely inside gives an extremely skewed scaling.
+    const double min_s = W.MinEigenvalue(W.s.data());
+    if (min_s < 1.0 && m > 0) W.AddIdentity(W.s.data(), 1.0 - min_s);
+    const double min_z = W.MinEigenvalue(W.z.data());
+    if (min_z < 1.0 && m > 0) W.AddIdentity(W.z.data(), 1.0 - min_z);
   }
   W.tau = 1.0;
   W.kappa = 1.0;
@@ -843,6 +851,14 @@ Result Solver::Solve(const Problem& problem) {
   double step = 0.0, sigma = 0.0;
   int iteration_refinements = 0;
   double pres = 0.0, dres = 0.0, pcost = 0.0, dcost = 0.0, gap = 0.0;
+  // Best iterate so far by the merit max(pres / tol, dres / tol, gap / gap tol): returned if the
+  // iteration stalls, and accepted as kOptimal with reduced accuracy if it meets the reduced tolerances.
+  double best_merit = std::numeric_limits<double>::infinity();
+  double progress_merit = std::numeric_limits<double>::infinity();
+  int progress_iteration = 0;
+  bool have_best = false;
+  bool best_reduced_ok = false;
+  bool reduced_accuracy = false;
 
   for (;; ++iteration) {
     // ---- residuals of the homogeneous embedding ----
@@ -903,6 +919,36 @@ Result Solver::Solve(const Problem& problem) {
       status = Status::kOptimal;
       message = "tolerances met";
       break;
+    }
+    {
+      const double worst_gap = std::max(gap, pd_gap);
+      const double gap_merit = std::min(worst_gap / options_.absolute_gap_tolerance,
+                                        worst_gap / (options_.relative_gap_tolerance * gap_scale));
+      const double merit = std::max({pres / options_.feasibility_tolerance,
+                                     dres / options_.feasibility_tolerance, gap_merit});
+      if (merit < best_merit) {
+        best_merit = merit;
+        have_best = true;
+        W.best_x = W.x;
+        W.best_y = W.y;
+        W.best_z = W.z;
+        W.best_s = W.s;
+        W.best_tau = tau;
+        W.best_kappa = kappa;
+        best_reduced_ok = pres <= options_.reduced_feasibility_tolerance &&
+                          dres <= options_.reduced_feasibility_tolerance &&
+                          (worst_gap <= options_.reduced_gap_tolerance ||
+                           worst_gap <= options_.reduced_gap_tolerance * gap_scale);
+      }
+      if (merit < 0.5 * progress_merit) {  // count only real progress
+        progress_merit = merit;
+        progress_iteration = iteration;
+      }
+      if (iteration - progress_iteration >= options_.stall_iterations) {
+        status = Status::kNumericalError;
+        message = "no progress in " + std::to_string(options_.stall_iterations) + " iterations";
+        break;
+      }
     }
     if (kappa > tau) {
       // Primal infeasibility: b'y + h'z < 0 with A'y + G'z ~ 0.
@@ -1044,8 +1090,24 @@ Result Solver::Solve(const Problem& problem) {
     W.kappa += step * dkappa;
   }
 
+  // ---- stalled or stopped: fall back to the best iterate ----
+  if ((status == Status::kNumericalError || status == Status::kIterationLimit) && have_best) {
+    W.x = W.best_x;
+    W.y = W.best_y;
+    W.z = W.best_z;
+    W.s = W.best_s;
+    W.tau = W.best_tau;
+    W.kappa = W.best_kappa;
+    if (best_reduced_ok) {
+      message = "reduced accuracy (" + message + "; the best iterate meets the reduced tolerances)";
+      status = Status::kOptimal;
+      reduced_accuracy = true;
+    }
+  }
+
   // ---- output in the user's coordinates ----
   result.status = status;
+  result.reduced_accuracy = reduced_accuracy;
   result.message = message;
   result.iterations = iteration;
   result.num_refinement_steps = W.refinement_counter;

@@ -70,6 +70,8 @@ void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vecto
   inv_d_.assign(n, 0.0);
   l_row_val_.assign(row_col_.size(), 0.0);
   work_.assign(n, 0.0);
+  regularized_.assign(n, 0);
+  num_regularized_ = 0;
 }
 
 int SparseLdl::Factor(const double* values, const signed char* signs, double threshold,
@@ -96,7 +98,7 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
     }
     if (!(signs[k] * d > threshold)) {  // also catches NaN
       d = signs[k] * replacement;
-      ++regularized;
+      regularized_[regularized++] = k;
     }
     d_[k] = d;
     inv_d_[k] = 1.0 / d;
@@ -104,6 +106,7 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
   // Row-wise copy of L for the forward solve (a gather per row instead of a scatter per column).
   const int nnz = static_cast<int>(row_slot_.size());
   for (int q = 0; q < nnz; ++q) l_row_val_[q] = lx[row_slot_[q]];
+  num_regularized_ = regularized;
   return regularized;
 }
 

@@ -33,7 +33,8 @@ namespace timeopt::conic {
 /// Termination status of Solver::Solve.
 enum class Status {
   /// The tolerances of Options were met: x, y, z, s are an approximately optimal primal-dual pair.
-  /// x is usable.
+  /// x is usable. If the iteration stalled just short of them (rounding limits on badly conditioned
+  /// problems), the best iterate met the reduced tolerances instead and Result::reduced_accuracy is set.
   kOptimal,
   /// The problem has no feasible x. y and z hold a certificate normalized so that b'y + h'z = -1,
   /// with A'y + G'z = 0 (to infeasibility_tolerance) and z in K. x and s are zero and not usable.
@@ -42,11 +43,12 @@ enum class Status {
   /// that c'x = -1, with A x = 0 and G x + s = 0 (to infeasibility_tolerance) and s in K: an improving
   /// ray. y and z are zero. x is a direction, not a solution.
   kDualInfeasible,
-  /// max_iterations (or the time limit) was reached first. x, y, z, s are the last iterate scaled by
+  /// max_iterations (or the time limit) was reached first. x, y, z, s are the best iterate scaled by
   /// 1/tau; they satisfy the cone constraints but not necessarily the tolerances (see the residuals).
   kIterationLimit,
-  /// The iteration could not make progress (tiny steps, failed factorization or non-finite values).
-  /// x, y, z, s are the last finite iterate scaled by 1/tau; use them only after checking residuals.
+  /// The iteration could not make progress (stalled, tiny steps, failed factorization or non-finite
+  /// values) and the best iterate does not meet the reduced tolerances. x, y, z, s are the best iterate
+  /// scaled by 1/tau; use them only after checking the residuals.
   kNumericalError,
   /// Solve() has not run. Nothing is usable.
   kNotSolved,
@@ -91,6 +93,9 @@ struct Result {
   int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
   int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
   bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
+  /// True if kOptimal was reached only with the reduced tolerances of SolverOptions (the iteration
+  /// stalled near the optimum); residuals and gap tell the accuracy actually reached.
+  bool reduced_accuracy = false;
   int kkt_size = 0;                ///< Dimension of the KKT system (n + p + m + 2 per expanded cone).
   long long kkt_nonzeros = 0;      ///< Stored non-zeros of the KKT upper triangle.
   long long factor_nonzeros = 0;   ///< Non-zeros of the LDL' factor L (strictly lower part).
@@ -112,6 +117,16 @@ struct SolverOptions {
   double relative_gap_tolerance = 1e-8;
   /// Tolerance of the infeasibility certificates: residual of the normalized ray. 1e-8.
   double infeasibility_tolerance = 1e-8;
+  /// Reduced tolerances: if the iteration stalls (no halving of the merit, see stall_iterations, a
+  /// step below min_step or the iteration limit), the best iterate is returned as kOptimal with
+  /// Result::reduced_accuracy = true when its relative residuals are <= reduced_feasibility_tolerance
+  /// and its gap <= reduced_gap_tolerance (absolute, or relative to the objective). 1e-6 and 1e-5:
+  /// the last digits of a badly conditioned problem are lost to rounding, not to the method.
+  double reduced_feasibility_tolerance = 1e-6;
+  double reduced_gap_tolerance = 1e-5;
+  /// Iterations without halving the merit max(pres / tol, dres / tol, gap / gap tol) after which the
+  /// iteration is declared stalled. 8.
+  int stall_iterations = 8;
   /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
   int max_iterations = 100;
   /// Wall-time limit of one Solve(), seconds. Infinite by default.

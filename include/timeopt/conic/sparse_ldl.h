@@ -29,6 +29,9 @@ class SparseLdl {
   void Solve(double* x) const;
 
   int size() const { return n_; }
+  /// Pivots (in elimination order) replaced by the last Factor(): the first num_regularized() entries.
+  const std::vector<int>& regularized_pivots() const { return regularized_; }
+  int num_regularized() const { return num_regularized_; }
   /// Non-zeros of L strictly below the diagonal.
   long long num_factor_nonzeros() const { return static_cast<long long>(l_row_.size()); }
   /// Multiply-adds of one factorization (a measure of its cost).
@@ -48,6 +51,8 @@ class SparseLdl {
   std::vector<int> row_col_;     // columns i < k with L(k, i) != 0, increasing (a topological order)
   std::vector<int> row_slot_;    // slot of L(k, i) in l_val_
   mutable std::vector<double> work_;
+  std::vector<int> regularized_;
+  int num_regularized_ = 0;
   long long flops_ = 0;
 };
 
