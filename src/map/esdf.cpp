@@ -4,118 +4,201 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 namespace timeopt {
+namespace internal {
+namespace {
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+}  // namespace
+
+void* AllocateLarge(std::size_t bytes) {
+  if (bytes < kHugePage) return ::operator new(bytes);
+  const std::size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+  void* pointer = ::operator new(rounded, std::align_val_t{kHugePage});
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  madvise(pointer, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
+#endif
+  return pointer;
+}
+
+void DeallocateLarge(void* pointer, std::size_t bytes) noexcept {
+  if (bytes < kHugePage) {
+    ::operator delete(pointer);
+  } else {
+    ::operator delete(pointer, std::align_val_t{kHugePage});
+  }
+}
+
+}  // namespace internal
+
 namespace {
 
 // Squared distances in voxel units are integers; uint32 keeps the working buffer at 4 bytes per
 // voxel. kInfinite marks "no site on this line / plane / box yet".
 using SquaredCells = uint32_t;
 constexpr SquaredCells kInfinite = std::numeric_limits<SquaredCells>::max();
+// "No site in this column" during the z pass (unsquared voxel counts stay far below it).
+constexpr SquaredCells kFar = SquaredCells{1} << 30;
 
 // Workspace of the 1-D lower-envelope transform (Felzenszwalb-Huttenlocher), sized for the
 // longest axis.
 struct EnvelopeWorkspace {
   explicit EnvelopeWorkspace(int n)
-      : input(n), output(n), sites(n), boundaries(static_cast<size_t>(n) + 1) {}
+      : input(n), envelope(n) {}
+  struct Parabola {
+    int64_t height;     // F(apex) = f[apex] + apex^2
+    int64_t start_num;  // F(apex) - F(previous apex)
+    int64_t start_den;  // apex - previous apex (> 0)
+    int64_t apex;
+  };
   std::vector<SquaredCells> input;
-  std::vector<SquaredCells> output;
-  std::vector<int> sites;          // parabola apexes of the envelope
-  std::vector<double> boundaries;  // where parabola k starts to be the lowest
+  std::vector<Parabola> envelope;  // the lower envelope, apexes increasing
 };
 
-// output[q] = min_p (q - p)^2 + input[p] over the p with finite input; kInfinite when none.
-void LowerEnvelope(int n, EnvelopeWorkspace* ws) {
+// Lower envelope on the sub-line [lo, hi] of the input, written to output[q] for q in
+// [first, last) (a sub-range of [lo, hi]).
+void EnvelopeRange(int lo, int hi, int first, int last, EnvelopeWorkspace* ws,
+                   SquaredCells* output, int64_t output_stride) {
   const SquaredCells* f = ws->input.data();
-  SquaredCells* d = ws->output.data();
-  int* v = ws->sites.data();
-  double* z = ws->boundaries.data();
+  // Parabola p: (q - p)^2 + f[p]. Parabolas a > b cross at s(a, b) = (F(a) - F(b)) / (2 (a - b))
+  // with F(p) = f[p] + p^2. Envelope entry k keeps the numerator F(v_k) - F(v_{k-1}) and the
+  // denominator v_k - v_{k-1} of (twice) its start, so crossings are compared by
+  // cross-multiplication in 64-bit integers: exact, and no division.
+  EnvelopeWorkspace::Parabola* env = ws->envelope.data();
   int k = -1;
-  auto intersection = [f](int q, int p) {
-    const double fq = static_cast<double>(f[q]) + static_cast<double>(q) * q;
-    const double fp = static_cast<double>(f[p]) + static_cast<double>(p) * p;
-    return (fq - fp) / (2.0 * (q - p));
-  };
-  for (int q = 0; q < n; ++q) {
+  for (int q = lo; q <= hi; ++q) {
     if (f[q] == kInfinite) continue;
-    if (k < 0) {
-      k = 0;
-      v[0] = q;
-      z[0] = -std::numeric_limits<double>::infinity();
-      z[1] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    double s = intersection(q, v[k]);
-    while (s <= z[k]) {  // z[0] = -inf ends the loop at k = 0
+    const int64_t fq = static_cast<int64_t>(f[q]) + static_cast<int64_t>(q) * q;
+    // Pop entry k while the new parabola is below it before it starts being the lowest:
+    // s(q, v_k) <= s(v_k, v_{k-1}).
+    while (k > 0 && (fq - env[k].height) * env[k].start_den <= env[k].start_num * (q - env[k].apex)) {
       --k;
-      s = intersection(q, v[k]);
     }
     ++k;
-    v[k] = q;
-    z[k] = s;
-    z[k + 1] = std::numeric_limits<double>::infinity();
+    if (k > 0) {
+      env[k].start_num = fq - env[k - 1].height;
+      env[k].start_den = q - env[k - 1].apex;
+    }
+    env[k].apex = q;
+    env[k].height = fq;
   }
   if (k < 0) {
-    std::fill_n(d, n, kInfinite);
+    for (int q = first; q < last; ++q) output[q * output_stride] = kInfinite;
     return;
   }
   int j = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[j + 1] < q) ++j;
-    const int64_t dq = q - v[j];
-    d[q] = static_cast<SquaredCells>(dq * dq + f[v[j]]);
+  for (int q = first; q < last; ++q) {
+    // Advance while the next parabola starts before q: s(v_{j+1}, v_j) < q.
+    while (j < k && env[j + 1].start_num < 2 * static_cast<int64_t>(q) * env[j + 1].start_den) {
+      ++j;
+    }
+    const int64_t dq = q - env[j].apex;
+    output[q * output_stride] = static_cast<SquaredCells>(dq * dq + f[env[j].apex]);
+  }
+}
+
+// output[q] = min_p (q - p)^2 + input[p] over the p with finite input; kInfinite when none.
+// `output` may be the memory the input was copied from (input is read from the workspace).
+//
+// A zero input (a site on this line) ends the influence of everything behind it: for q right of
+// a zero at l, any p < l gives (q - p)^2 + f[p] > (q - l)^2. So the line splits at its zeros into
+// independent runs, each solved with its two bounding zeros; zeros themselves output 0. In
+// sparse or dense maps most of the work disappears this way.
+void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t output_stride) {
+  const SquaredCells* f = ws->input.data();
+  int q = 0;
+  while (q < n) {
+    if (f[q] == 0) {
+      output[q * output_stride] = 0;
+      ++q;
+      continue;
+    }
+    const int first = q;
+    bool any_finite = false;
+    while (q < n && f[q] != 0) {
+      any_finite |= f[q] != kInfinite;
+      ++q;
+    }
+    const int last = q;  // exclusive; f[last] == 0 when last < n
+    const int lo = first > 0 ? first - 1 : first;
+    const int hi = last < n ? last : last - 1;
+    if (!any_finite && lo == first && hi == last - 1) {
+      for (int i = first; i < last; ++i) output[i * output_stride] = kInfinite;
+    } else {
+      EnvelopeRange(lo, hi, first, last, ws, output, output_stride);
+    }
   }
 }
 
 // Exact squared Euclidean distance (voxel units) from every voxel to the nearest voxel whose
-// occupancy equals `site_value`, into `squared` (row-major, x fastest).
+// occupancy equals `site_value`, into `squared` (row-major, x fastest). The order of the axes
+// follows the memory: z first (binary input, sweeps over whole planes), then y inside each
+// plane (which fits in cache), then x along contiguous rows.
 void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
-                              std::vector<SquaredCells>* squared) {
+                              SquaredCells* out) {
   const int nx = grid.box.size.x();
   const int ny = grid.box.size.y();
   const int nz = grid.box.size.z();
   const int64_t plane = static_cast<int64_t>(nx) * ny;
-  squared->resize(static_cast<size_t>(plane * nz));
-  SquaredCells* out = squared->data();
   const uint8_t* occ = grid.occupied.data();
 
-  // x: distance to the nearest site on the row, by a forward and a backward sweep.
-  for (int64_t row = 0; row < static_cast<int64_t>(ny) * nz; ++row) {
-    const uint8_t* in = occ + row * nx;
-    SquaredCells* o = out + row * nx;
-    int64_t last = -1;
-    for (int x = 0; x < nx; ++x) {
-      if (in[x] == site_value) last = x;
-      o[x] = last < 0 ? kInfinite : static_cast<SquaredCells>(x - last);
-    }
-    last = -1;
-    for (int x = nx - 1; x >= 0; --x) {
-      if (in[x] == site_value) last = x;
-      if (last >= 0) o[x] = std::min(o[x], static_cast<SquaredCells>(last - x));
-      if (o[x] != kInfinite) o[x] *= o[x];
+  // z: distance (in voxels, not squared) to the nearest site in the column by a forward and a
+  // backward sweep over whole planes (branch-free, vectorizable); kFar marks "no site" and is
+  // squared into kInfinite when the y pass reads it.
+  for (int64_t i = 0; i < plane; ++i) out[i] = occ[i] == site_value ? 0 : kFar;
+  for (int z = 1; z < nz; ++z) {
+    const uint8_t* o = occ + z * plane;
+    const SquaredCells* previous = out + (z - 1) * plane;
+    SquaredCells* current = out + z * plane;
+    for (int64_t i = 0; i < plane; ++i) {
+      current[i] = o[i] == site_value ? 0 : std::min<SquaredCells>(previous[i] + 1, kFar);
     }
   }
-  // y, then z: lower envelope of parabolas along each line.
-  EnvelopeWorkspace ws(std::max(ny, nz));
+  for (int z = nz - 2; z >= 0; --z) {
+    const SquaredCells* next = out + (z + 1) * plane;
+    SquaredCells* current = out + z * plane;
+    for (int64_t i = 0; i < plane; ++i) current[i] = std::min(current[i], next[i] + 1);
+  }
+  auto square = [](SquaredCells d) { return d >= kFar ? kInfinite : d * d; };
+
+  EnvelopeWorkspace ws(std::max(nx, ny));
+  // y: per plane (which stays in cache), one gathered column at a time; squares the z pass.
   if (ny > 1) {
     for (int z = 0; z < nz; ++z) {
+      SquaredCells* p = out + z * plane;
       for (int x = 0; x < nx; ++x) {
-        SquaredCells* line = out + z * plane + x;
-        for (int y = 0; y < ny; ++y) ws.input[y] = line[static_cast<int64_t>(y) * nx];
-        LowerEnvelope(ny, &ws);
-        for (int y = 0; y < ny; ++y) line[static_cast<int64_t>(y) * nx] = ws.output[y];
+        SquaredCells* line = p + x;
+        bool all_same = true;
+        for (int y = 0; y < ny; ++y) {
+          ws.input[y] = square(line[static_cast<int64_t>(y) * nx]);
+          all_same &= ws.input[y] == ws.input[0];
+        }
+        if (all_same && (ws.input[0] == 0 || ws.input[0] == kInfinite)) {
+          // All sites or no site: nothing to propagate.
+          for (int y = 0; y < ny; ++y) line[static_cast<int64_t>(y) * nx] = ws.input[0];
+          continue;
+        }
+        LowerEnvelope(ny, &ws, line, nx);
       }
     }
+  } else {
+    for (int64_t i = 0; i < plane * nz; ++i) out[i] = square(out[i]);
   }
-  if (nz > 1) {
-    for (int64_t xy = 0; xy < plane; ++xy) {
-      SquaredCells* line = out + xy;
-      for (int z = 0; z < nz; ++z) ws.input[z] = line[z * plane];
-      LowerEnvelope(nz, &ws);
-      for (int z = 0; z < nz; ++z) line[z * plane] = ws.output[z];
+  // x: contiguous rows.
+  if (nx > 1) {
+    for (int64_t row = 0; row < static_cast<int64_t>(ny) * nz; ++row) {
+      SquaredCells* line = out + row * nx;
+      std::copy_n(line, nx, ws.input.begin());
+      LowerEnvelope(nx, &ws, line, 1);
     }
   }
 }
@@ -156,17 +239,30 @@ Esdf::Esdf(const OccupancyGrid& grid) {
   values_.resize(count);
   const float half = static_cast<float>(0.5 * resolution_);
   const float res = static_cast<float>(resolution_);
-  std::vector<SquaredCells> squared;
-  SquaredDistanceTransform(grid, 1, &squared);  // to the nearest occupied voxel
-  for (size_t i = 0; i < count; ++i) {
-    if (grid.occupied[i] == 0) values_[i] = std::sqrt(static_cast<float>(squared[i])) * res - half;
-  }
-  SquaredDistanceTransform(grid, 0, &squared);  // to the nearest free voxel
-  for (size_t i = 0; i < count; ++i) {
-    if (grid.occupied[i] != 0) {
-      values_[i] = half - std::sqrt(static_cast<float>(squared[i])) * res;
-    }
-  }
+  // Uninitialized on purpose: every element is written by the z sweep first.
+  struct Release {
+    size_t bytes;
+    void operator()(SquaredCells* p) const { internal::DeallocateLarge(p, bytes); }
+  };
+  const size_t squared_bytes = count * sizeof(SquaredCells);
+  const std::unique_ptr<SquaredCells, Release> squared(
+      static_cast<SquaredCells*>(internal::AllocateLarge(squared_bytes)), Release{squared_bytes});
+  // Free voxels: distance to the nearest occupied centre minus half a voxel (occupied voxels get
+  // -r/2 here and are overwritten next).
+  SquaredDistanceTransform(grid, 1, squared.get());
+  // Every squared distance is finite here (the box has a site of each kind). Eigen's array sqrt
+  // vectorizes where std::sqrt in a loop would not (errno).
+  using SquaredArray = Eigen::Map<const Eigen::Array<SquaredCells, Eigen::Dynamic, 1>>;
+  using ValueArray = Eigen::Map<Eigen::ArrayXf>;
+  const Eigen::Index size = static_cast<Eigen::Index>(count);
+  ValueArray values(values_.data(), size);
+  values = SquaredArray(squared.get(), size).cast<float>().sqrt() * res - half;
+  // Occupied voxels: minus (distance to the nearest free centre minus half a voxel).
+  SquaredDistanceTransform(grid, 0, squared.get());
+  const Eigen::Map<const Eigen::Array<uint8_t, Eigen::Dynamic, 1>> is_occupied(
+      grid.occupied.data(), size);
+  values = (is_occupied != uint8_t{0})
+               .select(half - SquaredArray(squared.get(), size).cast<float>().sqrt() * res, values);
 }
 
 Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box) {
@@ -212,7 +308,8 @@ inline double Esdf::Evaluate(const Eigen::Vector3d& point, Eigen::Vector3d* grad
 
   const double ox = px - qx, oy = py - qy, oz = pz - qz;
   const double outside_sq = ox * ox + oy * oy + oz * oz;
-  const double outside = std::sqrt(outside_sq);  // NaN for a NaN coordinate
+  // Inside the domain the square root is skipped; a NaN coordinate still gives NaN.
+  const double outside = outside_sq != 0.0 ? std::sqrt(outside_sq) : 0.0;
   distance += outside;
   if constexpr (kWithGradient) {
     const double gx = ((1.0 - tz) * (e00 + ty * (e10 - e00)) + tz * (e01 + ty * (e11 - e01))) *

@@ -73,7 +73,7 @@ void WriteEsdfSlicePng(const Esdf& esdf, double height, const std::string& path,
   const double scale = options.max_distance > 0.0 ? options.max_distance : std::max(largest, r);
 
   const int map_w = nx * ppv, map_h = ny * ppv;
-  const int bar_h = 46;
+  const int bar_h = 62;
   const int width = std::max(map_w, 320), image_h = map_h + bar_h;
   std::unique_ptr<cairo_surface_t, SurfaceDeleter> surface(
       cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, image_h));
@@ -113,10 +113,13 @@ void WriteEsdfSlicePng(const Esdf& esdf, double height, const std::string& path,
   cairo_move_to(cr.get(), bar_x, bar_y + bar_hh + 14);
   cairo_show_text(cr.get(), "0 m");
   std::snprintf(label, sizeof(label), "%.2f m", scale);
-  cairo_move_to(cr.get(), bar_x + bar_w - 40, bar_y + bar_hh + 14);
+  cairo_text_extents_t extents;
+  cairo_text_extents(cr.get(), label, &extents);
+  cairo_move_to(cr.get(), bar_x + bar_w - extents.x_advance, bar_y + bar_hh + 14);
   cairo_show_text(cr.get(), label);
-  std::snprintf(label, sizeof(label), "z = %.2f m, black: obstacle, %g m voxels", height, r);
-  cairo_move_to(cr.get(), bar_x + 60, bar_y + bar_hh + 14);
+  std::snprintf(label, sizeof(label), "signed distance at z = %.2f m; black: obstacle; %g m voxels",
+                height, r);
+  cairo_move_to(cr.get(), bar_x, bar_y + bar_hh + 32);
   cairo_show_text(cr.get(), label);
 
   cairo_surface_flush(surface.get());
