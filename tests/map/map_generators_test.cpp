@@ -20,8 +20,9 @@ TEST(MapGeneratorsTest, ForestIsDeterministicAndHasTheRequestedTrees) {
   EXPECT_EQ(a.box.size, Eigen::Vector3i(60, 50, 20));
   options.seed = 5;
   EXPECT_NE(GenerateForest(options).occupied, a.occupied);
-  // Six trees (0.2 * 30 m^2) of radius 0.15..0.4 m cover between 0 (all overlapping is
-  // impossible to rule out, but not all six can vanish) and 6 * pi * 0.4^2 = 3.0 m^2 per layer.
+  // Six trees (0.2 * 30 m^2) of radius 0.15..0.4 m cover at least one disc of the smallest
+  // radius (they may overlap; half of it allows for the voxel rasterization of a 3-voxel disc)
+  // and at most six discs of the largest radius, 6 * pi * 0.4^2 = 3.0 m^2 per layer.
   const double layer_area = a.CountOccupied() / 20.0 * 0.01;
   EXPECT_GT(layer_area, 3.14159 * 0.15 * 0.15 * 0.5);
   EXPECT_LT(layer_area, 6 * 3.14159 * 0.4 * 0.4 + 0.5);  // + rasterization slack
@@ -56,6 +57,7 @@ TEST(MapGeneratorsTest, SharpTurnCorridorIsFreeAlongThePolylineAndSolidOutside) 
   // The turn is near-reverse: the legs' directions differ by turn_angle_deg.
   const Eigen::Vector2d d0 = (line.col(1) - line.col(0)).normalized();
   const Eigen::Vector2d d1 = (line.col(2) - line.col(1)).normalized();
+  // acos of a rounded dot product: 1e-9 degrees is far above double rounding, far below any bug.
   EXPECT_NEAR(std::acos(d0.dot(d1)) * 180.0 / 3.14159265358979, options.turn_angle_deg, 1e-9);
   // Solid walls around: the box's corner is inside an obstacle.
   EXPECT_LT(esdf.VoxelDistance(grid.box.min), 0.0);

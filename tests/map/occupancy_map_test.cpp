@@ -112,6 +112,7 @@ TEST(OccupancyMapTest, LoadsFullOtFilesOfOcTreeAndColorOcTree) {
     EXPECT_EQ(a.State(p), expected);
     EXPECT_EQ(b.State(p), expected);
   }
+  // The same leaves summed in the same order: equal up to rounding of a sum of ~100 cubes.
   EXPECT_NEAR(a.OccupiedVolume(), b.OccupiedVolume(), 1e-12);
   EXPECT_GT(a.OccupiedVolume(), 0.0);
 }
