@@ -231,7 +231,7 @@ TEST(EsdfTest, BatchedQueriesEqualSingleQueries) {
   Eigen::VectorXd distances, only_distances;
   Eigen::Matrix3Xd gradients;
   esdf.Distances(points, &distances, &gradients);
-  esdf.Distances(points, &only_distances);
+  esdf.Distances(points, &only_distances, nullptr);
   ASSERT_EQ(distances.size(), 200);
   ASSERT_EQ(gradients.cols(), 200);
   for (int j = 0; j < points.cols(); ++j) {
@@ -241,9 +241,14 @@ TEST(EsdfTest, BatchedQueriesEqualSingleQueries) {
     EXPECT_EQ(only_distances(j), d);
     EXPECT_EQ(gradients.col(j), g);
   }
-  // Through the interface the optimizers use.
+  // Through the interface the optimizers use, and its default batch loop.
   const DistanceField& field = esdf;
   EXPECT_EQ(field.Distance(points.col(3)), distances(3));
+  Eigen::VectorXd base_distances;
+  Eigen::Matrix3Xd base_gradients;
+  field.DistanceField::Distances(points, &base_distances, &base_gradients);
+  EXPECT_EQ(base_distances, distances);
+  EXPECT_EQ(base_gradients, gradients);
 }
 
 TEST(EsdfTest, NonFinitePointGivesNonFiniteDistanceWithoutCrashing) {
@@ -287,7 +292,7 @@ TEST(EsdfTest, InvalidGridsThrowClearErrors) {
   const Esdf esdf(one);
   EXPECT_THROW(esdf.VoxelDistance(Eigen::Vector3i(4, 0, 0)), std::invalid_argument);
   Eigen::VectorXd d;
-  EXPECT_THROW(esdf.Distances(Eigen::Matrix3Xd(3, 2), nullptr), std::invalid_argument);
+  EXPECT_THROW(esdf.Distances(Eigen::Matrix3Xd(3, 2), nullptr, nullptr), std::invalid_argument);
   EXPECT_THROW(esdf.DistanceAndGradient(Eigen::Vector3d::Zero(), nullptr), std::invalid_argument);
 }
 

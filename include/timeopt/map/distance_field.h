@@ -22,6 +22,13 @@ class DistanceField {
   // consistent with finite differences of Distance() wherever that function is differentiable.
   virtual double DistanceAndGradient(const Eigen::Vector3d& point,
                                      Eigen::Vector3d* gradient) const = 0;
+
+  // Batched queries: column j of `points` gives (*distances)(j) and, when `gradients` is not
+  // null, gradients->col(j); both outputs are resized. One virtual call per batch: implementations
+  // override it with a loop free of virtual calls (the default calls DistanceAndGradient per
+  // point). Throws std::invalid_argument when `distances` is null.
+  virtual void Distances(const Eigen::Matrix3Xd& points, Eigen::VectorXd* distances,
+                         Eigen::Matrix3Xd* gradients) const;
 };
 
 }  // namespace timeopt

@@ -81,10 +81,9 @@ class Esdf final : public DistanceField {
   double DistanceAndGradient(const Eigen::Vector3d& point,
                              Eigen::Vector3d* gradient) const override;
 
-  // Batched queries, column j of `points` giving distances(j) and gradients->col(j). `distances`
-  // must not be null and is resized; `gradients` may be null (distances only) and is resized.
+  // Batched queries (see DistanceField::Distances), inlined per point: no virtual call inside.
   void Distances(const Eigen::Matrix3Xd& points, Eigen::VectorXd* distances,
-                 Eigen::Matrix3Xd* gradients = nullptr) const;
+                 Eigen::Matrix3Xd* gradients) const override;
 
   // The value stored at the centre of voxel `index` (world voxel index, inside box()).
   double VoxelDistance(const Eigen::Vector3i& index) const;
