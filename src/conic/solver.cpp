@@ -954,7 +954,8 @@ Result Solver::Solve(const Problem& problem) {
       // Primal infeasibility: b'y + h'z < 0 with A'y + G'z ~ 0.
       const double bz = by + hz;
       if (bz < 0.0) {
-        const double res = NormInf((W.Aty + W.Gtz).eval().data(), n) / -bz;
+        W.dx = W.Aty + W.Gtz;  // dx is free scratch here (no allocation in the loop)
+        const double res = NormInf(W.dx.data(), n) / -bz;
         if (res <= options_.infeasibility_tolerance) {
           status = Status::kPrimalInfeasible;
           message = "certificate of primal infeasibility found";
@@ -962,7 +963,8 @@ Result Solver::Solve(const Problem& problem) {
         }
       }
       if (cx < 0.0) {
-        const double res = std::max(NormInf(W.Ax.data(), p), NormInf((W.Gx + W.s).eval().data(), m)) / -cx;
+        W.dz = W.Gx + W.s;  // dz is free scratch here
+        const double res = std::max(NormInf(W.Ax.data(), p), NormInf(W.dz.data(), m)) / -cx;
         if (res <= options_.infeasibility_tolerance) {
           status = Status::kDualInfeasible;
           message = "certificate of dual infeasibility (unboundedness) found";
@@ -1023,8 +1025,15 @@ Result Solver::Solve(const Problem& problem) {
       W.ds = -W.dtmp2 - W.dtmp3;
       dkappa = -(d_kappa + kappa * dtau) / tau;
     };
+    // Step to the boundary, computed in the scaled space: s + a ds in K iff lambda + a W^{-1} ds in K,
+    // and z + a dz in K iff lambda + a W dz in K (W maps K onto K). lambda is well centered, so the
+    // root of the cone's quadratic is well conditioned there, unlike at s or z themselves.
+    // Leaves W^{-1} ds in ds_aff and W dz in dz_aff.
     auto max_step = [&](double dtau, double dkappa) {
-      double alpha = std::min(W.MaxStep(W.s.data(), W.ds.data()), W.MaxStep(W.z.data(), W.dz.data()));
+      W.ApplyWinv(W.ds.data(), W.ds_aff.data());
+      W.ApplyW(W.dz.data(), W.dz_aff.data());
+      double alpha = std::min(W.MaxStep(W.lambda.data(), W.ds_aff.data()),
+                              W.MaxStep(W.lambda.data(), W.dz_aff.data()));
       if (dtau < 0.0) alpha = std::min(alpha, -tau / dtau);
       if (dkappa < 0.0) alpha = std::min(alpha, -kappa / dkappa);
       return alpha;
@@ -1039,9 +1048,7 @@ Result Solver::Solve(const Problem& problem) {
     sigma = std::min(1.0, std::max(0.0, sigma));
 
     // ---- corrector: d_s = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e ----
-    W.ApplyWinv(W.ds.data(), W.ds_aff.data());
-    W.ApplyW(W.dz.data(), W.dz_aff.data());
-    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());
+    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());  // set by max_step
     W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
     W.d_s += W.dtmp1;
     W.AddIdentity(W.d_s.data(), -sigma * mu);
