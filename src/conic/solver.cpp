@@ -53,9 +53,7 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!(max_solve_time_in_seconds > 0.0)) return fail("max_solve_time_in_seconds must be positive");
   if (!(step_fraction > 0.0 && step_fraction < 1.0)) return fail("step_fraction must be in (0, 1)");
   if (!(min_step > 0.0 && min_step < 1.0)) return fail("min_step must be in (0, 1)");
-  if (!(reduced_feasibility_tolerance >= feasibility_tolerance)) {
-    return fail("reduced_feasibility_tolerance must be >= feasibility_tolerance");
-  }
+  if (!(reduced_feasibility_tolerance >= 0.0)) return fail("reduced_feasibility_tolerance must be >= 0");
   if (!(reduced_gap_tolerance >= 0.0)) return fail("reduced_gap_tolerance must be >= 0");
   if (stall_iterations < 1) return fail("stall_iterations must be >= 1");
   if (!(static_regularization >= 0.0 && std::isfinite(static_regularization))) {
@@ -935,10 +933,12 @@ Result Solver::Solve(const Problem& problem) {
         W.best_s = W.s;
         W.best_tau = tau;
         W.best_kappa = kappa;
-        best_reduced_ok = pres <= options_.reduced_feasibility_tolerance &&
-                          dres <= options_.reduced_feasibility_tolerance &&
-                          (worst_gap <= options_.reduced_gap_tolerance ||
-                           worst_gap <= options_.reduced_gap_tolerance * gap_scale);
+        // The reduced tolerances never ask for more than the strict ones.
+        const double reduced_feas = std::max(options_.reduced_feasibility_tolerance, options_.feasibility_tolerance);
+        const double reduced_gap = std::max({options_.reduced_gap_tolerance, options_.absolute_gap_tolerance,
+                                             options_.relative_gap_tolerance});
+        best_reduced_ok = pres <= reduced_feas && dres <= reduced_feas &&
+                          (worst_gap <= reduced_gap || worst_gap <= reduced_gap * gap_scale);
       }
       if (merit < 0.5 * progress_merit) {  // count only real progress
         progress_merit = merit;

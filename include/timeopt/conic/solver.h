@@ -121,12 +121,13 @@ struct SolverOptions {
   /// step below min_step or the iteration limit), the best iterate is returned as kOptimal with
   /// Result::reduced_accuracy = true when its relative residuals are <= reduced_feasibility_tolerance
   /// and its gap <= reduced_gap_tolerance (absolute, or relative to the objective). 1e-6 and 1e-5:
-  /// the last digits of a badly conditioned problem are lost to rounding, not to the method.
+  /// the last digits of a badly conditioned problem are lost to rounding, not to the method. Values
+  /// below the strict tolerances act as the strict ones; set both to 0 to disable the fallback.
   double reduced_feasibility_tolerance = 1e-6;
   double reduced_gap_tolerance = 1e-5;
   /// Iterations without halving the merit max(pres / tol, dres / tol, gap / gap tol) after which the
-  /// iteration is declared stalled. 8.
-  int stall_iterations = 8;
+  /// iteration is declared stalled. 5: a healthy iteration halves it at least every other step.
+  int stall_iterations = 5;
   /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
   int max_iterations = 100;
   /// Wall-time limit of one Solve(), seconds. Infinite by default.
