@@ -53,7 +53,7 @@ constexpr SquaredCells kFar = SquaredCells{1} << 30;
 // longest axis.
 struct EnvelopeWorkspace {
   explicit EnvelopeWorkspace(int n)
-      : input(n), envelope(n) {}
+      : input(static_cast<size_t>(n)), envelope(static_cast<size_t>(n)) {}
   struct Parabola {
     int64_t height;     // F(apex) = f[apex] + apex^2
     int64_t start_num;  // F(apex) - F(previous apex)
@@ -140,7 +140,7 @@ void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t o
 }
 
 // Exact squared Euclidean distance (voxel units) from every voxel to the nearest voxel whose
-// occupancy equals `site_value`, into `squared` (row-major, x fastest). The order of the axes
+// occupancy equals `site_value`, into `out` (row-major, x fastest). The order of the axes
 // follows the memory: z first (binary input, sweeps over whole planes), then y inside each
 // plane (which fits in cache), then x along contiguous rows.
 void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
@@ -208,12 +208,13 @@ void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
 Esdf::Esdf(const OccupancyGrid& grid) {
   grid.Validate();
   const Eigen::Vector3i n = grid.box.size;
-  // Largest squared distance in voxels must stay below kInfinite.
+  // The largest squared distance in voxels must stay below 2^31 (int32 conversion below; it is
+  // also far from kInfinite).
   const double largest = (n.cast<double>().array() - 1.0).square().sum();
-  if (largest >= static_cast<double>(kInfinite)) {
+  if (largest >= 2147483648.0) {
     std::ostringstream message;
     message << "ESDF box of " << n.transpose() << " voxels is too long (squared diagonal must be "
-            << "below 2^32 voxels^2)";
+            << "below 2^31 voxels^2)";
     throw std::invalid_argument(message.str());
   }
   const int64_t occupied = grid.CountOccupied();
@@ -250,19 +251,20 @@ Esdf::Esdf(const OccupancyGrid& grid) {
   // Free voxels: distance to the nearest occupied centre minus half a voxel (occupied voxels get
   // -r/2 here and are overwritten next).
   SquaredDistanceTransform(grid, 1, squared.get());
-  // Every squared distance is finite here (the box has a site of each kind). Eigen's array sqrt
-  // vectorizes where std::sqrt in a loop would not (errno).
-  using SquaredArray = Eigen::Map<const Eigen::Array<SquaredCells, Eigen::Dynamic, 1>>;
+  // Every squared distance is finite here (the box has a site of each kind) and below 2^31 (the
+  // size check above), so it converts to float as int32, which vectorizes (uint32 does not without
+  // AVX-512); so does Eigen's array sqrt, where std::sqrt in a loop would not (errno).
+  using SquaredArray = Eigen::Map<const Eigen::Array<int32_t, Eigen::Dynamic, 1>>;
   using ValueArray = Eigen::Map<Eigen::ArrayXf>;
   const Eigen::Index size = static_cast<Eigen::Index>(count);
   ValueArray values(values_.data(), size);
-  values = SquaredArray(squared.get(), size).cast<float>().sqrt() * res - half;
+  values = SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res - half;
   // Occupied voxels: minus (distance to the nearest free centre minus half a voxel).
   SquaredDistanceTransform(grid, 0, squared.get());
   const Eigen::Map<const Eigen::Array<uint8_t, Eigen::Dynamic, 1>> is_occupied(
       grid.occupied.data(), size);
   values = (is_occupied != uint8_t{0})
-               .select(half - SquaredArray(squared.get(), size).cast<float>().sqrt() * res, values);
+               .select(half - SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res, values);
 }
 
 Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box) {

@@ -1,5 +1,6 @@
 #include "timeopt/map/voxel_grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -63,8 +64,15 @@ OccupancyGrid::OccupancyGrid(double resolution_in, const VoxelBox& box_in, bool 
 }
 
 int64_t OccupancyGrid::CountOccupied() const {
+  // Sums in 32-bit chunks (vectorizable) of at most 2^24 values each.
   int64_t count = 0;
-  for (uint8_t v : occupied) count += v;
+  const size_t n = occupied.size();
+  for (size_t begin = 0; begin < n; begin += (size_t{1} << 24)) {
+    const size_t end = std::min(n, begin + (size_t{1} << 24));
+    uint32_t chunk = 0;
+    for (size_t i = begin; i < end; ++i) chunk += occupied[i];
+    count += chunk;
+  }
   return count;
 }
 
@@ -78,9 +86,9 @@ void OccupancyGrid::Validate() const {
     message << "grid holds " << occupied.size() << " values, expected " << box.num_voxels();
     throw std::invalid_argument(message.str());
   }
-  for (uint8_t v : occupied) {
-    if (v > 1) throw std::invalid_argument("grid occupancy values must be 0 or 1");
-  }
+  uint8_t high_bits = 0;  // an OR over all values vectorizes; a throwing loop would not
+  for (uint8_t v : occupied) high_bits |= static_cast<uint8_t>(v & 0xFEu);
+  if (high_bits != 0) throw std::invalid_argument("grid occupancy values must be 0 or 1");
 }
 
 }  // namespace timeopt
