@@ -853,6 +853,7 @@ Result Solver::Solve(const Problem& problem) {
   // iteration stalls, and accepted as kOptimal with reduced accuracy if it meets the reduced tolerances.
   double best_merit = std::numeric_limits<double>::infinity();
   double progress_merit = std::numeric_limits<double>::infinity();
+  double progress_mu = std::numeric_limits<double>::infinity();
   int progress_iteration = 0;
   bool have_best = false;
   bool best_reduced_ok = false;
@@ -940,8 +941,11 @@ Result Solver::Solve(const Problem& problem) {
         best_reduced_ok = pres <= reduced_feas && dres <= reduced_feas &&
                           (worst_gap <= reduced_gap || worst_gap <= reduced_gap * gap_scale);
       }
-      if (merit < 0.5 * progress_merit) {  // count only real progress
-        progress_merit = merit;
+      // Progress: the merit or mu halved since the last mark (mu alone keeps falling on infeasible
+      // problems, whose merit does not, until a certificate is found).
+      if (merit < 0.5 * progress_merit || mu < 0.5 * progress_mu) {
+        progress_merit = std::min(progress_merit, merit);
+        progress_mu = std::min(progress_mu, mu);
         progress_iteration = iteration;
       }
       if (iteration - progress_iteration >= options_.stall_iterations) {

@@ -125,8 +125,9 @@ struct SolverOptions {
   /// below the strict tolerances act as the strict ones; set both to 0 to disable the fallback.
   double reduced_feasibility_tolerance = 1e-6;
   double reduced_gap_tolerance = 1e-5;
-  /// Iterations without halving the merit max(pres / tol, dres / tol, gap / gap tol) after which the
-  /// iteration is declared stalled. 5: a healthy iteration halves it at least every other step.
+  /// Iterations without halving either the merit max(pres / tol, dres / tol, gap / gap tol) or the
+  /// complementarity mu after which the iteration is declared stalled. 5: a healthy iteration
+  /// halves both at least every other step.
   int stall_iterations = 5;
   /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
   int max_iterations = 100;
