@@ -114,7 +114,8 @@ class StreamChecker {
   StreamChecker(const std::string& content, size_t offset, size_t node_bytes)
       : content_(content), pos_(offset), node_bytes_(node_bytes) {}
 
-  // .bt: per inner node two bytes, 2 bits per child (01 occupied leaf, 10 free leaf, 11 inner).
+  // .bt: per inner node two bytes, 2 bits per child i at bit 2 (i % 4) of byte i / 4: value 1 a
+  // free leaf, 2 an occupied leaf, 3 an inner node, 0 no child.
   bool CheckBinaryNode(int depth) {
     if (pos_ + 2 > content_.size()) return Fail("data ends early (truncated file)");
     const auto low = static_cast<unsigned char>(content_[pos_]);
@@ -181,6 +182,18 @@ std::string ReadWholeFile(const std::string& path) {
   std::string content((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (file.bad()) throw FileError("cannot read map file '" + path + "'");
   return content;
+}
+
+// The shortest decimal text that reads back as exactly `value` ("0.1", not "0.10000000000000001").
+std::string ShortestText(double value) {
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::ostringstream text;
+    text << std::setprecision(digits) << value;
+    if (std::stod(text.str()) == value) return text.str();
+  }
+  std::ostringstream text;
+  text << std::setprecision(17) << value;
+  return text.str();
 }
 
 Eigen::Vector3i IndexFromKey(const octomap::OcTreeKey& key) {
@@ -285,37 +298,82 @@ OccupancyMap OccupancyMap::Load(const std::string& path, UnknownSpace unknown) {
 OccupancyMap OccupancyMap::FromGrid(const OccupancyGrid& grid, UnknownSpace unknown) {
   grid.Validate();
   OccupancyMap map(grid.resolution, unknown);
-  octomap::OcTree& tree = map.impl_->tree;
-  const float occupied_value = tree.getClampingThresMaxLog();
-  const float free_value = tree.getClampingThresMinLog();
   const Eigen::Vector3i lo = grid.box.min.array() + kKeyOffset;
   const Eigen::Vector3i hi = grid.box.end().array() + kKeyOffset;  // exclusive
   if ((lo.array() < 0).any() || (hi.array() > 2 * kKeyOffset).any()) {
     throw std::invalid_argument("grid box leaves the OctoMap key range");
   }
-  // Depth-first over aligned cubes in OctoMap's child order (Morton order): a node's children
-  // are complete before its sibling starts, so setNodeValue's pruning keeps the tree small.
-  auto fill = [&](auto&& self, const Eigen::Vector3i& corner, int level) -> void {
-    const int size = 1 << level;
-    if ((corner.array() >= hi.array()).any() || (corner.array() + size <= lo.array()).any()) {
-      return;
-    }
-    if (level == 0) {
-      const octomap::OcTreeKey key(static_cast<octomap::key_type>(corner.x()),
-                                   static_cast<octomap::key_type>(corner.y()),
-                                   static_cast<octomap::key_type>(corner.z()));
-      const bool occupied = grid.At(corner.array() - kKeyOffset);
-      tree.setNodeValue(key, occupied ? occupied_value : free_value);
-      return;
-    }
-    const int half = size / 2;
-    for (int child = 0; child < 8; ++child) {
-      const Eigen::Vector3i offset((child & 1) ? half : 0, (child & 2) ? half : 0,
-                                   (child & 4) ? half : 0);
-      self(self, corner + offset, level - 1);
+  // The pruned tree is written in OctoMap's binary node stream and read back by OctoMap (the
+  // same stream a .bt file holds), which is linear in the voxels; inserting voxel by voxel with
+  // setNodeValue costs a root-to-leaf walk each.
+  //
+  // Pyramid: level k cell c covers keys [c 2^k, (c + 1) 2^k) per axis; its state is unknown (no
+  // voxel of the grid), free or occupied (every voxel the same) or mixed (an inner node).
+  enum : uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2, kMixed = 3 };
+  struct Level {
+    Eigen::Vector3i lo, size;  // cells [lo, lo + size)
+    std::vector<uint8_t> state;
+    uint8_t At(const Eigen::Vector3i& c) const {
+      const Eigen::Vector3i local = c - lo;
+      if ((local.array() < 0).any() || (local.array() >= size.array()).any()) return kUnknown;
+      return state[static_cast<size_t>(local.x() + static_cast<int64_t>(size.x()) *
+                                                       (local.y() + static_cast<int64_t>(size.y()) *
+                                                                        local.z()))];
     }
   };
-  fill(fill, Eigen::Vector3i::Zero(), kTreeDepth);
+  std::vector<Level> levels(kTreeDepth + 1);
+  levels[0].lo = lo;
+  levels[0].size = hi - lo;
+  levels[0].state.resize(grid.occupied.size());
+  for (size_t i = 0; i < grid.occupied.size(); ++i) {
+    levels[0].state[i] = grid.occupied[i] != 0 ? kOccupied : kFree;
+  }
+  for (int k = 1; k <= kTreeDepth; ++k) {
+    const Level& below = levels[k - 1];
+    Level& level = levels[k];
+    level.lo = Eigen::Vector3i(below.lo.x() >> 1, below.lo.y() >> 1, below.lo.z() >> 1);
+    const Eigen::Vector3i below_last = below.lo + below.size - Eigen::Vector3i::Ones();
+    level.size =
+        Eigen::Vector3i(below_last.x() >> 1, below_last.y() >> 1, below_last.z() >> 1) - level.lo +
+        Eigen::Vector3i::Ones();
+    level.state.resize(static_cast<size_t>(level.size.prod()));
+    size_t i = 0;
+    for (int z = 0; z < level.size.z(); ++z) {
+      for (int y = 0; y < level.size.y(); ++y) {
+        for (int x = 0; x < level.size.x(); ++x, ++i) {
+          const Eigen::Vector3i first_child = 2 * (level.lo + Eigen::Vector3i(x, y, z));
+          uint8_t combined = below.At(first_child);
+          for (int child = 1; child < 8 && combined != kMixed; ++child) {
+            const Eigen::Vector3i offset(child & 1, (child >> 1) & 1, (child >> 2) & 1);
+            if (below.At(first_child + offset) != combined) combined = kMixed;
+          }
+          level.state[i] = combined;
+        }
+      }
+    }
+  }
+  // Pre-order stream: for each inner node its two child bytes, then its inner children.
+  std::string stream;
+  auto write = [&](auto&& self, int k, const Eigen::Vector3i& cell) -> void {
+    uint8_t bytes[2] = {0, 0};
+    uint8_t child_states[8];
+    for (int child = 0; child < 8; ++child) {
+      const Eigen::Vector3i offset(child & 1, (child >> 1) & 1, (child >> 2) & 1);
+      child_states[child] = levels[k - 1].At(2 * cell + offset);
+      bytes[child / 4] |= static_cast<uint8_t>(child_states[child] << (2 * (child % 4)));
+    }
+    stream.push_back(static_cast<char>(bytes[0]));
+    stream.push_back(static_cast<char>(bytes[1]));
+    for (int child = 0; child < 8; ++child) {
+      if (child_states[child] == kMixed) {
+        const Eigen::Vector3i offset(child & 1, (child >> 1) & 1, (child >> 2) & 1);
+        self(self, k - 1, 2 * cell + offset);
+      }
+    }
+  };
+  write(write, kTreeDepth, Eigen::Vector3i::Zero());  // the root is always an inner node
+  std::istringstream input(stream);
+  map.impl_->tree.readBinaryData(input);
   return map;
 }
 
@@ -327,7 +385,7 @@ void OccupancyMap::Save(const std::string& path) const {
        << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
        << "id OcTree\n"
        << "size " << impl_->tree.size() << "\n"
-       << "res " << std::setprecision(17) << impl_->tree.getResolution() << "\n"
+       << "res " << ShortestText(impl_->tree.getResolution()) << "\n"
        << "data\n";
   impl_->tree.writeBinaryData(file);
   file.close();
