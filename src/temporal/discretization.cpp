@@ -288,8 +288,11 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         const GridValue& v = d.grid[static_cast<size_t>(g)];
         const Eigen::Vector3d t = curve.Evaluate(i, k * ds, 1);
         for (int a = 0; a < 3; ++a) {
+          // A tangent component that vanishes up to rounding (e.g. 1e-15 on an axis the curve
+          // does not move along) bounds nothing but would put a huge number (vmax^2 / 1e-30) into
+          // the problem data.
+          if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
           const double t2 = t(a) * t(a);
-          if (t2 == 0.0) continue;
           if (v.var >= 0) {
             double& ub = d.var_upper[static_cast<size_t>(v.var)];
             ub = std::min(ub, vmax2(a) / (t2 * v.scale));

@@ -10,6 +10,7 @@
 // Objective: sum 2 ds d_k + rho ds t (eq. 36). Velocity bounds, acceleration and
 // acceleration-change rows are the discretization's linear rows.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -109,6 +110,9 @@ class SocpTemporalSolver final : public TemporalSolver {
     o.relative_gap_tolerance = options.tolerance;
     o.infeasibility_tolerance = options.tolerance;
     o.max_iterations = options.max_iterations;
+    // Infeasible temporal problems drive tau to 0 over 10-15 iterations while the residual merit
+    // barely moves; the solver's default stall window (8) would stop them before the certificate.
+    o.stall_iterations = std::max(o.stall_iterations, 20);
     solver_ = conic::Solver(o);
   }
 
