@@ -990,7 +990,7 @@ Result Solver::Solve(const Problem& problem) {
     // ---- scaling and factorization ----
     if (!W.ComputeScaling()) {
       status = Status::kNumericalError;
-      message = "iterate left the cone interior";
+      message = "iterate left the cone interior at iteration " + std::to_string(iteration);
       break;
     }
     W.UpdateKktScaling(delta);
