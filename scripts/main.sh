@@ -8,5 +8,5 @@ cd "$(dirname "$0")/.."
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j2 --target timeopt_cli
 ./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 \
-  --max-acceleration 2 -K 50 --out-dir results
+  --max-acceleration 2 -K 50 --constraint-mode certified --out-dir results
 echo "results: $(pwd)/results"

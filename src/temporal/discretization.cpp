@@ -123,6 +123,50 @@ class RowBuilder {
   double constant_ = 0.0;
 };
 
+// One row w . (b^k, b^{k+1}) <= 1 of a cell.
+struct CellRow {
+  Eigen::Vector2d w;
+  LinearRow::Kind kind;
+};
+
+// Keeps the rows that can be active for some b >= 0: the points w on the upper-right convex hull,
+// i.e. those maximizing w . b for some direction b in the non-negative quadrant (Farkas: a row is
+// redundant exactly when its w lies below a convex combination of the others). Gift wrapping from
+// the direction (1, 0) to (0, 1); O(rows x hull size), rows per cell are few.
+void PruneCellRows(std::vector<CellRow>* rows) {
+  std::vector<CellRow>& r = *rows;
+  if (r.size() <= 1) return;
+  // Start: the largest w0 (ties: the largest w1), optimal for b = (1, 0).
+  size_t current = 0;
+  for (size_t j = 1; j < r.size(); ++j) {
+    if (r[j].w(0) > r[current].w(0) ||
+        (r[j].w(0) == r[current].w(0) && r[j].w(1) > r[current].w(1))) {
+      current = j;
+    }
+  }
+  std::vector<CellRow> kept{r[current]};
+  for (size_t guard = 0; guard < r.size(); ++guard) {
+    // The next vertex takes over at the smallest angle: for a candidate with larger w1 the switch
+    // happens where (w_j - w_cur) . b = 0, tan(theta) = (w0_cur - w0_j) / (w1_j - w1_cur).
+    const Eigen::Vector2d p = r[current].w;
+    size_t next = r.size();
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < r.size(); ++j) {
+      const double dq = r[j].w(1) - p(1);
+      if (!(dq > 0.0)) continue;
+      const double tan_theta = (p(0) - r[j].w(0)) / dq;
+      if (tan_theta < best || (tan_theta == best && next < r.size() && r[j].w(1) > r[next].w(1))) {
+        best = tan_theta;
+        next = j;
+      }
+    }
+    if (next == r.size()) break;
+    current = next;
+    kept.push_back(r[current]);
+  }
+  r = std::move(kept);
+}
+
 // Boundary grid value from a given velocity and the tangent there.
 GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
                         const TemporalProblem& p, const std::string& field, int* next_var) {
@@ -279,9 +323,8 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   RowBuilder row(d);
   const auto vmax2 = limits.max_velocity.cwiseProduct(limits.max_velocity);
 
-  // ---- velocity ----
+  // ---- velocity at grid points (paper mode, eq. 41): f'_axis(s_k)^2 b_k <= vmax^2 ----
   if (problem.constraint_mode == ConstraintMode::kPaper) {
-    // eq. 41 at every grid point: f'_axis(s_k)^2 b_k <= vmax^2, a bound on the variable.
     for (int i = 0; i < m; ++i) {
       for (int k = 0; k <= K; ++k) {
         const int g = d.GridIndex(i, k);
@@ -306,33 +349,11 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         }
       }
     }
-  } else {
-    // Certified: Bernstein coefficients of f'_axis(s)^2 b(s) on each cell, b linear in the cell.
-    for (const Cell& c : d.cells) {
-      const int k = c.first_grid - d.GridIndex(c.piece, 0);
-      const PolynomialPiece deriv = curve.piece(c.piece).Derivative(1);
-      for (int a = 0; a < 3; ++a) {
-        const Eigen::VectorXd q = Shifted(deriv.coefficients().row(a).transpose(), k * ds, ds);
-        if (q.cwiseAbs().maxCoeff() == 0.0) continue;
-        const Eigen::VectorXd q2 = Multiply(q, q);
-        Eigen::Vector2d one_minus_u(1.0, -1.0), u(0.0, 1.0);
-        const Eigen::VectorXd w0 = PowerToBernstein(Multiply(q2, one_minus_u));
-        const Eigen::VectorXd w1 = PowerToBernstein(Multiply(q2, u));
-        for (int j = 0; j < w0.size(); ++j) {
-          row.Add(c.first_grid, w0(j));
-          row.Add(c.first_grid + 1, w1(j));
-          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
-                     vmax2(a),
-                     std::string("squared velocity on axis ") + kAxisNames[a] + " in piece " +
-                         std::to_string(c.piece));
-        }
-      }
-    }
   }
 
-  // ---- acceleration ----
-  // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on (b^k, b^{k+1}):
-  // f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Kept for the acceleration-change rows in both modes.
+  // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on
+  // (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
+  // rows and by the acceleration-change rows in both modes.
   std::vector<Eigen::Matrix<double, 3, 2>> mid_acc(d.cells.size());
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
@@ -343,34 +364,58 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
     mid_acc[ci].col(0) = -f1 / (2.0 * ds) + f2 / 2.0;
     mid_acc[ci].col(1) = f1 / (2.0 * ds) + f2 / 2.0;
   }
+
+  // ---- per-cell rows over (b^k, b^{k+1}) ----
+  // Every velocity and acceleration row of a cell involves only its two grid values, so after
+  // dividing by its limit it reads w . (b^k, b^{k+1}) <= 1. With b >= 0 only the rows on the
+  // upper-right convex hull of the points w can be active (see PruneCellRows); the others are
+  // dropped when prune_redundant_rows is set. The feasible set is unchanged.
+  std::vector<CellRow> cell_rows;
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
+    const int k = c.first_grid - d.GridIndex(c.piece, 0);
+    cell_rows.clear();
     for (int a = 0; a < 3; ++a) {
       const double amax = limits.max_acceleration(a);
-      const std::string what = std::string("acceleration on axis ") + kAxisNames[a] +
-                               " in piece " + std::to_string(c.piece);
       if (problem.constraint_mode == ConstraintMode::kPaper) {
-        row.Add(c.first_grid, mid_acc[ci](a, 0));
-        row.Add(c.first_grid + 1, mid_acc[ci](a, 1));
-        row.Finish(LinearRow::Kind::kAcceleration, -amax, amax, what);
-      } else {
-        // Certified: acc(u) = f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
-        const int k = c.first_grid - d.GridIndex(c.piece, 0);
-        const Eigen::VectorXd p1 =
-            Shifted(curve.piece(c.piece).Derivative(1).coefficients().row(a).transpose(), k * ds, ds);
-        const Eigen::VectorXd p2 =
-            Shifted(curve.piece(c.piece).Derivative(2).coefficients().row(a).transpose(), k * ds, ds);
-        const Eigen::VectorXd p2a = Multiply(p2, Eigen::Vector2d(1.0, -1.0));
-        const Eigen::VectorXd p2b = Multiply(p2, Eigen::Vector2d(0.0, 1.0));
-        const int size = static_cast<int>(std::max(p1.size(), p2a.size()));
-        const Eigen::VectorXd c0 = PowerToBernstein(Padded(-p1 / (2.0 * ds), size) + Padded(p2a, size));
-        const Eigen::VectorXd c1 = PowerToBernstein(Padded(p1 / (2.0 * ds), size) + Padded(p2b, size));
-        for (int j = 0; j < size; ++j) {
-          row.Add(c.first_grid, c0(j));
-          row.Add(c.first_grid + 1, c1(j));
-          row.Finish(LinearRow::Kind::kAcceleration, -amax, amax, what);
+        const Eigen::Vector2d w(mid_acc[ci](a, 0) / amax, mid_acc[ci](a, 1) / amax);
+        cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
+        cell_rows.push_back({-w, LinearRow::Kind::kAcceleration});
+        continue;
+      }
+      // Certified velocity: Bernstein coefficients of f'(s(u))^2 ((1 - u) b0 + u b1).
+      const PolynomialPiece& piece = curve.piece(c.piece);
+      const Eigen::VectorXd q = Shifted(piece.Derivative(1).coefficients().row(a).transpose(), k * ds, ds);
+      if (q.cwiseAbs().maxCoeff() > 0.0) {
+        const Eigen::VectorXd q2 = Multiply(q, q);
+        const Eigen::VectorXd w0 = PowerToBernstein(Multiply(q2, Eigen::Vector2d(1.0, -1.0)));
+        const Eigen::VectorXd w1 = PowerToBernstein(Multiply(q2, Eigen::Vector2d(0.0, 1.0)));
+        for (int j = 0; j < w0.size(); ++j) {
+          cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / vmax2(a), LinearRow::Kind::kVelocity});
         }
       }
+      // Certified acceleration: f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
+      const Eigen::VectorXd p2 = Shifted(piece.Derivative(2).coefficients().row(a).transpose(), k * ds, ds);
+      const Eigen::VectorXd p2a = Multiply(p2, Eigen::Vector2d(1.0, -1.0));
+      const Eigen::VectorXd p2b = Multiply(p2, Eigen::Vector2d(0.0, 1.0));
+      const int size = static_cast<int>(std::max(q.size(), p2a.size()));
+      const Eigen::VectorXd c0 = PowerToBernstein(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
+      const Eigen::VectorXd c1 = PowerToBernstein(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
+      for (int j = 0; j < size; ++j) {
+        const Eigen::Vector2d w(c0(j) / amax, c1(j) / amax);
+        cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
+        cell_rows.push_back({-w, LinearRow::Kind::kAcceleration});
+      }
+    }
+    if (problem.prune_redundant_rows) PruneCellRows(&cell_rows);
+    for (const CellRow& r : cell_rows) {
+      if (r.w(0) <= 0.0 && r.w(1) <= 0.0) continue;  // holds for every b >= 0
+      row.Add(c.first_grid, r.w(0));
+      row.Add(c.first_grid + 1, r.w(1));
+      row.Finish(r.kind, -std::numeric_limits<double>::infinity(), 1.0,
+                 std::string(r.kind == LinearRow::Kind::kVelocity ? "velocity" : "acceleration") +
+                     " (relative to its limit) in piece " + std::to_string(c.piece) + " cell " +
+                     std::to_string(k));
     }
   }
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "timeopt/curve/interpolation.h"
+#include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -88,6 +89,60 @@ TEST_P(Certified, StraightLineMatchesClosedForm) {
   const TemporalResult r = Solve(p);
   ASSERT_TRUE(r.is_success()) << r.message;
   EXPECT_NEAR(r.total_time, 7.0, 7e-7);
+}
+
+}  // namespace
+}  // namespace timeopt
+
+namespace timeopt {
+namespace {
+
+// Pruning keeps exactly the feasible set: random b >= 0 (scaled around the optimum's magnitude) is
+// feasible for the pruned rows iff it is for the full rows, in both modes.
+TEST(RowPruning, KeepsTheFeasibleSetAndTheOptimum) {
+  std::mt19937 rng(12);
+  const Waypoints w = Walk(rng, 5);
+  for (ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
+    for (const PiecewiseCurve& curve : {NaturalCubicSpline(w), MinimumJerkSpline(w)}) {
+      TemporalProblem p = Problem(curve, 10, mode);
+      TemporalProblem full = p;
+      full.prune_redundant_rows = false;
+      const TemporalDiscretization dp = Discretize(p), df = Discretize(full);
+      ASSERT_EQ(dp.num_vars, df.num_vars);
+      EXPECT_LT(dp.rows.size(), df.rows.size());
+      const auto socp = MakeSocpTemporalSolver();
+      const TemporalResult rp = socp->Solve(p), rf = socp->Solve(full);
+      ASSERT_TRUE(rp.is_success()) << rp.message;
+      ASSERT_TRUE(rf.is_success()) << rf.message;
+      // Same problem, so the same optimum up to the solver tolerance (1e-8 relative).
+      EXPECT_NEAR(rp.total_time, rf.total_time, 1e-7 * rf.total_time);
+
+      // Sample around the optimum, feasible and infeasible points.
+      std::vector<double> x0(dp.num_vars);
+      for (int i = 0; i < dp.num_pieces; ++i) {
+        for (int k = 0; k <= 10; ++k) {
+          const GridValue& g = dp.grid[dp.GridIndex(i, k)];
+          if (g.var >= 0) x0[g.var] = rp.profile.b(i, k) / g.scale;
+        }
+      }
+      std::uniform_real_distribution<double> factor(0.5, 1.1);
+      int agree = 0, feasible = 0;
+      for (int trial = 0; trial < 400; ++trial) {
+        // Even trials: a common factor <= 1 (all rows are homogeneous in b here, so feasible);
+        // odd trials: independent factors, mostly infeasible.
+        std::vector<double> x = x0;
+        const double common = 0.5 + 0.5 * factor(rng) / 1.1;
+        for (double& v : x) v *= trial % 2 == 0 ? common : factor(rng);
+        // Violations are in different units (pruned rows are divided by their limit), so compare
+        // the verdicts with a tolerance far below the perturbation (>= 1e-3 relative typically).
+        const bool fp = dp.MaxViolation(x) <= 1e-9, ff = df.MaxViolation(x) <= 1e-9;
+        agree += fp == ff;
+        feasible += ff;
+      }
+      EXPECT_EQ(agree, 400) << "mode " << ToString(mode);
+      EXPECT_GT(feasible, 0);
+    }
+  }
 }
 
 }  // namespace

@@ -68,6 +68,11 @@ struct TemporalProblem {
   // 1e-9: far below any tangent of a curve that moves a millimetre per piece.
   double zero_tangent_tolerance = 1e-9;
 
+  // Drop the velocity and acceleration rows of a cell that cannot be active for any b >= 0 (they
+  // lie inside the convex hull of the others). The feasible set and the optimum are unchanged;
+  // only the solve gets faster. Off: every row of the formulation is passed to the solver.
+  bool prune_redundant_rows = true;
+
   // Throws std::invalid_argument naming the offending field ("limits.max_velocity[1]: expected a
   // positive finite number, got -1").
   void Validate() const;
