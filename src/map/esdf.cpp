@@ -142,7 +142,7 @@ void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t o
 // Exact squared Euclidean distance (voxel units) from every voxel to the nearest voxel whose
 // occupancy equals `site_value`, into `out` (row-major, x fastest). The order of the axes
 // follows the memory: z first (binary input, sweeps over whole planes), then y inside each
-// plane (which fits in cache), then x along contiguous rows.
+// plane (which fits in cache), then x along contiguous rows of the same plane.
 void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
                               SquaredCells* out) {
   const int nx = grid.box.size.x();
@@ -151,9 +151,8 @@ void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
   const int64_t plane = static_cast<int64_t>(nx) * ny;
   const uint8_t* occ = grid.occupied.data();
 
-  // z: distance (in voxels, not squared) to the nearest site in the column by a forward and a
-  // backward sweep over whole planes (branch-free, vectorizable); kFar marks "no site" and is
-  // squared into kInfinite when the y pass reads it.
+  // z, forward: distance (in voxels, not squared) to the nearest site at or below in the column;
+  // kFar marks "no site". Whole planes at a time (branch-free, vectorizable).
   for (int64_t i = 0; i < plane; ++i) out[i] = occ[i] == site_value ? 0 : kFar;
   for (int z = 1; z < nz; ++z) {
     const uint8_t* o = occ + z * plane;
@@ -163,42 +162,33 @@ void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
       current[i] = o[i] == site_value ? 0 : std::min<SquaredCells>(previous[i] + 1, kFar);
     }
   }
-  for (int z = nz - 2; z >= 0; --z) {
-    const SquaredCells* next = out + (z + 1) * plane;
-    SquaredCells* current = out + z * plane;
-    for (int64_t i = 0; i < plane; ++i) current[i] = std::min(current[i], next[i] + 1);
-  }
-  auto square = [](SquaredCells d) { return d >= kFar ? kInfinite : d * d; };
-
+  // Then plane by plane from the top: the backward z sweep finishes the plane (squared), and the
+  // y and x passes run on it while it is still in cache. `above` keeps the unsquared column
+  // distances of the plane above.
+  std::vector<SquaredCells> above(static_cast<size_t>(plane), kFar);
   EnvelopeWorkspace ws(std::max(nx, ny));
-  // y: per plane (which stays in cache), one gathered column at a time; squares the z pass.
-  if (ny > 1) {
-    for (int z = 0; z < nz; ++z) {
-      SquaredCells* p = out + z * plane;
+  for (int z = nz - 1; z >= 0; --z) {
+    SquaredCells* p = out + z * plane;
+    for (int64_t i = 0; i < plane; ++i) {
+      const SquaredCells d = std::min(p[i], above[i] + 1);
+      above[i] = d;
+      p[i] = d >= kFar ? kInfinite : d * d;
+    }
+    // y: one gathered column at a time.
+    if (ny > 1) {
       for (int x = 0; x < nx; ++x) {
         SquaredCells* line = p + x;
-        bool all_same = true;
-        for (int y = 0; y < ny; ++y) {
-          ws.input[y] = square(line[static_cast<int64_t>(y) * nx]);
-          all_same &= ws.input[y] == ws.input[0];
-        }
-        if (all_same && (ws.input[0] == 0 || ws.input[0] == kInfinite)) {
-          // All sites or no site: nothing to propagate.
-          for (int y = 0; y < ny; ++y) line[static_cast<int64_t>(y) * nx] = ws.input[0];
-          continue;
-        }
+        for (int y = 0; y < ny; ++y) ws.input[y] = line[static_cast<int64_t>(y) * nx];
         LowerEnvelope(ny, &ws, line, nx);
       }
     }
-  } else {
-    for (int64_t i = 0; i < plane * nz; ++i) out[i] = square(out[i]);
-  }
-  // x: contiguous rows.
-  if (nx > 1) {
-    for (int64_t row = 0; row < static_cast<int64_t>(ny) * nz; ++row) {
-      SquaredCells* line = out + row * nx;
-      std::copy_n(line, nx, ws.input.begin());
-      LowerEnvelope(nx, &ws, line, 1);
+    // x: contiguous rows.
+    if (nx > 1) {
+      for (int y = 0; y < ny; ++y) {
+        SquaredCells* line = p + static_cast<int64_t>(y) * nx;
+        std::copy_n(line, nx, ws.input.begin());
+        LowerEnvelope(nx, &ws, line, 1);
+      }
     }
   }
 }
