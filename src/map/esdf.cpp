@@ -107,7 +107,8 @@ void EnvelopeRange(int lo, int hi, int first, int last, EnvelopeWorkspace* ws,
 }
 
 // output[q] = min_p (q - p)^2 + input[p] over the p with finite input; kInfinite when none.
-// `output` may be the memory the input was copied from (input is read from the workspace).
+// In place: `output` must hold the input already (ws->input is a copy of it), so entries that do
+// not change (zeros, lines without a site) are not written again.
 //
 // A zero input (a site on this line) ends the influence of everything behind it: for q right of
 // a zero at l, any p < l gives (q - p)^2 + f[p] > (q - l)^2. So the line splits at its zeros into
@@ -117,8 +118,7 @@ void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t o
   const SquaredCells* f = ws->input.data();
   int q = 0;
   while (q < n) {
-    if (f[q] == 0) {
-      output[q * output_stride] = 0;
+    if (f[q] == 0) {  // a site: stays 0
       ++q;
       continue;
     }
@@ -132,7 +132,7 @@ void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t o
     const int lo = first > 0 ? first - 1 : first;
     const int hi = last < n ? last : last - 1;
     if (!any_finite && lo == first && hi == last - 1) {
-      for (int i = first; i < last; ++i) output[i * output_stride] = kInfinite;
+      continue;  // no site on the whole line: stays kInfinite
     } else {
       EnvelopeRange(lo, hi, first, last, ws, output, output_stride);
     }
