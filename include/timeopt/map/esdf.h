@@ -14,7 +14,12 @@
 // with the occupied voxels as sites and once with the free ones.
 //
 // Between voxel centres the field is the trilinear interpolant of the centre values; the gradient
-// is the analytic gradient of that interpolant (continuous value, piecewise smooth gradient).
+// is the analytic gradient of that interpolant: the value is continuous everywhere, the gradient
+// is smooth inside each cell of eight centres and may jump across cell faces. Values are stored
+// as float (relative rounding 6e-8, i.e. below a micrometre for distances under 10 m).
+//
+// Build cost: linear in the voxels (two transforms of three passes each), 9 bytes per voxel at
+// the peak (occupancy, a 32-bit work array, the field).
 //
 // Outside the interpolation domain D = [first centre, last centre] (the box shrunk by half a
 // voxel on every side) the query point p is clamped to q = clamp(p, D) and
