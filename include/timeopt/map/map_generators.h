@@ -32,11 +32,12 @@ struct ForestOptions {
 };
 
 // The paper's Sect. I example: a narrow corridor with a near-reverse turn. Inside the bounds
-// everything is solid except the corridor: from `start` the first leg runs along +x for
-// `leg_length`, then the second leg turns by `turn_angle_deg` (180 would be a full reversal) and
-// runs `leg_length` again. The corridor is the set of points within corridor_width / 2 of this
-// polyline (in xy) and between floor and ceiling (z in [bounds.min.z + wall, bounds.max.z - wall]).
-// The bounds are chosen to fit the corridor plus `wall` of solid on every side.
+// everything is solid except the corridor: from its start the first leg runs along +x for
+// `leg_length`, then the heading turns left by `turn_angle_deg` (180 would be a full reversal) and
+// the second leg runs `leg_length` again. The corridor is the set of voxels whose centre lies
+// within corridor_width / 2 of this polyline (in xy) and at z in [wall, wall + height]. The
+// bounds start at the origin and fit the corridor plus `wall` of solid on every side (Bounds()),
+// so that the legs' ends are closed.
 struct SharpTurnOptions {
   double resolution = 0.1;       // voxel edge, metres
   double corridor_width = 1.2;   // metres
