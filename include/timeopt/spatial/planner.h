@@ -1,0 +1,136 @@
+#pragma once
+
+// The whole planner of Gao et al. (IROS 2018): front-end search, spatial optimization, a clearance
+// post-check, and the temporal stage.
+//
+//   start, goal, ESDF -> PathSearch (A* + shortcuts) -> waypoints, split into pieces of at most
+//   max_segment_length -> OptimizeSpatialCurve (Ceres) -> dense clearance check along the curve
+//   (retry with a higher collision weight and more joints; never a success below the radius)
+//   -> TemporalSolver (our SOCP, certified constraint mode: the velocity and acceleration limits
+//   hold in continuous time, not only at the grid points) -> time-optimal trajectory.
+//
+// The planner reads the map only through the ESDF (grid for the search, DistanceField for the
+// optimizer). Metres and seconds.
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/curve/piecewise_curve.h"
+#include "timeopt/map/esdf.h"
+#include "timeopt/spatial/path_search.h"
+#include "timeopt/spatial/spatial_optimizer.h"
+#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+
+struct PlannerOptions {
+  // Radius of the sphere around the curve that must stay free, metres. The search never enters a
+  // voxel closer than this and the post-check rejects any curve that comes closer.
+  double robot_radius = 0.3;
+  // Extra clearance the planner aims for, metres: the search's soft margin and the optimizer's
+  // safety distance are robot_radius + safety_margin. 0.2: two voxels of the forest maps.
+  double safety_margin = 0.2;
+  // Margin added to the radius in the post-check, metres. The ESDF is exact at voxel centres
+  // against voxel faces; the distance to a voxel's cube can be smaller by up to
+  // (sqrt(3) - 1) / 2 voxel (0.037 m at 0.1 m) and the trilinear interpolant adds a little, so
+  // 0.05 m keeps the true clearance above the radius on 0.1 m maps.
+  double clearance_check_margin = 0.05;
+  // Sampling step of the post-check along the curve, metres (upper bound; chord length).
+  double clearance_check_step = 0.02;
+
+  // Front-end. robot_radius and clearance_margin are overwritten from the fields above.
+  PathSearchOptions search;
+  // Waypoint segments longer than this are split evenly into pieces, metres. 1.0: about one
+  // piece per metre gives the optimizer room to bend around trees without many joints.
+  double max_segment_length = 1.0;
+  // Spatial stage. safe_distance is overwritten (robot_radius + safety_margin); in the
+  // time-coupled formulation max_velocity / max_acceleration are overwritten from `limits`
+  // (smallest axis).
+  SpatialOptimizerOptions spatial;
+  // Attempts of the spatial stage: attempt k (0-based) multiplies the collision weight by
+  // retry_collision_weight_factor^k and divides max_segment_length by 2^k. 3 attempts.
+  int max_attempts = 3;
+  double retry_collision_weight_factor = 4.0;
+
+  // Temporal stage.
+  TemporalLimits limits;
+  // Cells per piece, K. 30: the lower end of the paper's 30-50; the certified rows make the
+  // limits hold between grid points anyway, and the solve time grows linearly with K.
+  int temporal_cells_per_piece = 30;
+  double rho = 0.0;  // acceleration regularization (paper eq. 27)
+  // kCertified (default): the limits hold on the whole trajectory. kPaper: the paper's rows.
+  ConstraintMode constraint_mode = ConstraintMode::kCertified;
+  SocpTemporalOptions socp;
+
+  bool IsValid(std::string* error) const;
+};
+
+enum class PlanStatus {
+  kSuccess,             // curve, temporal result and trajectory usable
+  kInvalidInput,        // bad options or points; message names them
+  kStartOutsideMap,
+  kGoalOutsideMap,
+  kStartInCollision,    // start closer than robot_radius to an obstacle
+  kGoalInCollision,
+  kUnreachable,         // the front-end found no path with the clearance
+  kSearchLimit,         // the front-end's node limit was reached
+  kCollision,           // every spatial attempt came closer than the radius (curve is the last one)
+  kSpatialFailure,      // Ceres failed
+  kTemporalInfeasible,  // no time allocation meets the limits
+  kTemporalFailure,     // the temporal solver failed otherwise
+};
+// "success", "invalid_input", "start_outside_map", "goal_outside_map", "start_in_collision",
+// "goal_in_collision", "unreachable", "search_limit", "collision", "spatial_failure",
+// "temporal_infeasible", "temporal_failure".
+const char* ToString(PlanStatus status);
+
+struct PlanStageTimes {
+  double search_ms = 0.0;
+  double spatial_ms = 0.0;   // all attempts
+  double check_ms = 0.0;     // clearance post-checks
+  double temporal_ms = 0.0;  // building and solving the temporal problem
+  double total_ms = 0.0;
+};
+
+struct PlanResult {
+  PlanStatus status = PlanStatus::kInvalidInput;
+  std::string message;
+  Waypoints waypoints;          // front-end waypoints (after shortcutting, before splitting)
+  PiecewiseCurve curve;         // the spatial curve (unit pieces in s)
+  SpatialResult spatial;        // the last spatial attempt
+  TemporalResult temporal;      // set when the temporal stage ran
+  int spatial_attempts = 0;
+  double path_length = 0.0;     // arc length of the curve, metres
+  double min_clearance = 0.0;   // smallest ESDF distance on the dense check, metres
+  PlanStageTimes times;
+  bool is_success() const { return status == PlanStatus::kSuccess; }
+};
+
+// Holds the front-end's work arrays, so that repeated plans on one map do not allocate them again.
+// Not thread-safe.
+class Planner {
+ public:
+  explicit Planner(const Esdf& esdf);  // the ESDF must outlive the planner
+  // Never throws for bad input: the status says what went wrong.
+  PlanResult Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                  const PlannerOptions& options = {});
+
+ private:
+  const Esdf* esdf_;
+  PathSearch search_;
+};
+
+// One plan (a Planner for one call).
+PlanResult Plan(const Esdf& esdf, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                const PlannerOptions& options = {});
+
+// Smallest field value along the curve, sampled at chord steps of at most `step` metres.
+double MinClearance(const DistanceField& field, const PiecewiseCurve& curve, double step);
+
+// Waypoints with every segment longer than max_length split evenly.
+Waypoints SplitSegments(const Waypoints& waypoints, double max_length);
+
+}  // namespace timeopt

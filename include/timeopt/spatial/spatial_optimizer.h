@@ -1,0 +1,149 @@
+#pragma once
+
+// The spatial stage of Gao et al. (IROS 2018, Sect. III-B): a smooth, collision-free curve f(s) in
+// the virtual parameter s, with no dynamics in it,
+//
+//   minimize  w_s sum_i integral_0^1 |f_i'''(s)|^2 ds                  (jerk in s, eq. 2, exact)
+//           + w_c sum_i integral_0^1 c(d(f_i(s))) |f_i'(s)| ds         (collision line integral, eq. 4)
+//           + w_l sum_i integral_0^1 |f_i'(s)|^2 ds                    (length term, Sect. III-A)
+//
+// over C2 piecewise quintics with unit-s pieces. The decision variables are the states
+// (f, f', f'') at the interior joints; start and goal are fixed and at rest (f' = f'' = 0), so
+// continuity holds by construction and every residual touches only its piece's two joints. d is
+// the signed distance of a DistanceField (the optimizer never sees the occupancy map) and
+// c(d) = (exp((d_safe - d) / decay) - 1)^2 below the safety distance d_safe, 0 above. Solved by
+// Ceres' Levenberg-Marquardt with analytic Jacobians.
+//
+// The time-coupled baseline (the paper's Fig. 4 comparison) optimizes the same joints, but each
+// piece has a fixed heuristic duration T_i (chord length / heuristic speed), the joints store
+// time derivatives (so the curve is C2 in time), the jerk and length terms are integrals in time,
+// and soft penalties on velocity and acceleration above the limits are added.
+//
+// Units: metres, seconds. Costs are in the units of their integrals times their weights.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/curve/piecewise_curve.h"
+#include "timeopt/map/distance_field.h"
+
+namespace timeopt {
+
+enum class SpatialFormulation {
+  kSpatial,      // the paper's decoupled spatial stage (no time, no dynamics)
+  kTimeCoupled,  // the baseline: fixed piece durations and dynamic-feasibility penalties
+};
+const char* ToString(SpatialFormulation formulation);  // "spatial", "time_coupled"
+
+enum class SpatialLinearSolver {
+  kSparseNormalCholesky,  // Ceres SPARSE_NORMAL_CHOLESKY (SuiteSparse): linear in the joints
+  kDenseQr,               // Ceres DENSE_QR: faster for a handful of joints
+};
+
+struct SpatialOptimizerOptions {
+  SpatialFormulation formulation = SpatialFormulation::kSpatial;
+
+  // w_s: weight of the jerk integral (m^2 per unit s^5). 1: the reference scale; the other weights
+  // are relative to it.
+  double smoothness_weight = 1.0;
+  // w_c: weight of the collision line integral (per metre of curve inside the safety distance,
+  // times c). 10: pushes a curve out of the safety band within a few LM steps on 10 m forest
+  // paths while the jerk term still smooths it; the planner raises it when a check fails.
+  double collision_weight = 10.0;
+  // w_l: weight of the integral of |f'|^2 (m^2 per unit s). 0.5: keeps the free joints from
+  // drifting apart (the jerk term alone is indifferent to a uniform stretch of a straight piece).
+  double length_weight = 0.5;
+
+  // d_safe: the collision penalty is zero at and above this signed distance, metres. The planner
+  // sets it to robot radius + safety margin.
+  double safe_distance = 0.5;
+  // Decay length of the exponential penalty, metres: the penalty grows by e per this distance
+  // inside the safety band. 0.1: one voxel of the forest maps, steep enough to dominate the
+  // smoothness term before the curve reaches the robot radius.
+  double penalty_decay_length = 0.1;
+  // Gauss-Legendre nodes per piece for the collision integral. 12: exact for polynomials of degree
+  // 23, and pieces of about a metre are sampled every ~8 cm (below the map resolution of 0.1 m).
+  int collision_samples_per_piece = 12;
+  // eps in (|f'|^2 + eps^2)^(1/4), metres per unit s: keeps the residual differentiable where the
+  // tangent vanishes (the rest-to-rest ends). 1e-3 m: negligible against pieces of 0.5 m and more.
+  double tangent_epsilon = 1e-3;
+
+  // Levenberg-Marquardt limits. 100 iterations / 0.1 s: forest plans converge in 10-40.
+  int max_iterations = 100;
+  double max_solver_time_in_seconds = 0.1;
+  // Ceres' relative cost-change tolerance. 1e-5: the curve moves by far less than a voxel after.
+  double function_tolerance = 1e-5;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+  SpatialLinearSolver linear_solver = SpatialLinearSolver::kSparseNormalCholesky;
+
+  // ---- time-coupled baseline only ----
+  // Heuristic speed that fixes the piece durations T_i = max(chord_i / speed, min_duration), m/s.
+  double heuristic_speed = 1.0;
+  double min_piece_duration = 0.2;  // seconds, keeps T_i away from 0 for coincident joints
+  // Soft limits of the dynamic-feasibility penalties, m/s and m/s^2 (per axis).
+  double max_velocity = 2.0;
+  double max_acceleration = 2.0;
+  // Weight of the squared excess over the limits. 10: same order as the collision term.
+  double dynamic_weight = 10.0;
+  // Evenly spaced samples per piece for the dynamic penalties. 10.
+  int dynamic_samples_per_piece = 10;
+
+  // False, with a message naming the field, when an option is out of range.
+  bool IsValid(std::string* error) const;
+};
+
+// One Levenberg-Marquardt iteration (Ceres' IterationSummary): iteration 0 is the initial point.
+struct SpatialIteration {
+  int iteration = 0;
+  // Objective (sum of squared residuals = the weighted integrals) at the iterate after this
+  // iteration: the step's cost when it was accepted, else the previous iterate's.
+  double cost = 0.0;
+  // Objective at the step Ceres tried in this iteration (accepted or not).
+  double step_cost = 0.0;
+  double time_seconds = 0.0;  // cumulative solver time, seconds
+  bool step_accepted = false;
+};
+
+enum class SpatialStatus {
+  kConverged,       // a Ceres convergence tolerance was met; curve usable
+  kIterationLimit,  // iteration or time limit; curve usable (cost never above the initial one)
+  kInvalidInput,    // bad options or waypoints; message names them; nothing usable
+  kFailure,         // Ceres failed (e.g. a non-finite cost); nothing usable
+};
+const char* ToString(SpatialStatus status);
+
+// Cost terms as they enter the objective (weights included).
+struct SpatialCostBreakdown {
+  double smoothness = 0.0;
+  double collision = 0.0;
+  double length = 0.0;
+  double dynamic = 0.0;  // time-coupled baseline only
+  double total() const { return smoothness + collision + length + dynamic; }
+};
+
+struct SpatialResult {
+  SpatialStatus status = SpatialStatus::kFailure;
+  std::string message;
+  // Unit-s pieces. Spatial: C2 in s. Time-coupled: C2 in time with the durations below, so only G1
+  // in s (the temporal stage handles that through its joint ratios).
+  PiecewiseCurve curve;
+  std::vector<double> durations;  // time-coupled: the fixed piece durations, seconds; else empty
+  SpatialCostBreakdown initial_cost, final_cost;
+  std::vector<SpatialIteration> iterations;
+  double solve_time_seconds = 0.0;  // problem construction and solve
+  bool is_usable() const {
+    return status == SpatialStatus::kConverged || status == SpatialStatus::kIterationLimit;
+  }
+};
+
+// Optimizes the curve whose joints start at `waypoints` (columns; the first and last are the fixed
+// start and goal). The initial curve is the minimum-jerk spline through them (rest to rest). The
+// field must outlive the call. Never throws for bad input: kInvalidInput with a message.
+SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& waypoints,
+                                   const SpatialOptimizerOptions& options = {});
+
+}  // namespace timeopt

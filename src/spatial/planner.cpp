@@ -1,0 +1,238 @@
+#include "timeopt/spatial/planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+namespace timeopt {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+PlanStatus FromSearch(PathSearchStatus status) {
+  switch (status) {
+    case PathSearchStatus::kSuccess: return PlanStatus::kSuccess;
+    case PathSearchStatus::kInvalidInput: return PlanStatus::kInvalidInput;
+    case PathSearchStatus::kStartOutsideMap: return PlanStatus::kStartOutsideMap;
+    case PathSearchStatus::kGoalOutsideMap: return PlanStatus::kGoalOutsideMap;
+    case PathSearchStatus::kStartInCollision: return PlanStatus::kStartInCollision;
+    case PathSearchStatus::kGoalInCollision: return PlanStatus::kGoalInCollision;
+    case PathSearchStatus::kUnreachable: return PlanStatus::kUnreachable;
+    case PathSearchStatus::kNodeLimit: return PlanStatus::kSearchLimit;
+  }
+  return PlanStatus::kInvalidInput;
+}
+
+}  // namespace
+
+const char* ToString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kSuccess: return "success";
+    case PlanStatus::kInvalidInput: return "invalid_input";
+    case PlanStatus::kStartOutsideMap: return "start_outside_map";
+    case PlanStatus::kGoalOutsideMap: return "goal_outside_map";
+    case PlanStatus::kStartInCollision: return "start_in_collision";
+    case PlanStatus::kGoalInCollision: return "goal_in_collision";
+    case PlanStatus::kUnreachable: return "unreachable";
+    case PlanStatus::kSearchLimit: return "search_limit";
+    case PlanStatus::kCollision: return "collision";
+    case PlanStatus::kSpatialFailure: return "spatial_failure";
+    case PlanStatus::kTemporalInfeasible: return "temporal_infeasible";
+    case PlanStatus::kTemporalFailure: return "temporal_failure";
+  }
+  return "unknown";
+}
+
+bool PlannerOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& field, const std::string& expected, double got) {
+    if (error != nullptr) {
+      std::ostringstream s;
+      s << field << ": expected " << expected << ", got " << got;
+      *error = s.str();
+    }
+    return false;
+  };
+  if (!std::isfinite(robot_radius) || robot_radius < 0.0) {
+    return fail("robot_radius", "a finite number >= 0 (metres)", robot_radius);
+  }
+  if (!std::isfinite(safety_margin) || safety_margin <= 0.0) {
+    return fail("safety_margin", "a positive number (metres)", safety_margin);
+  }
+  if (!std::isfinite(clearance_check_margin) || clearance_check_margin < 0.0) {
+    return fail("clearance_check_margin", "a finite number >= 0 (metres)", clearance_check_margin);
+  }
+  if (!std::isfinite(clearance_check_step) || clearance_check_step <= 0.0) {
+    return fail("clearance_check_step", "a positive number (metres)", clearance_check_step);
+  }
+  if (!std::isfinite(max_segment_length) || max_segment_length <= 0.0) {
+    return fail("max_segment_length", "a positive number (metres)", max_segment_length);
+  }
+  if (max_attempts < 1) return fail("max_attempts", "an integer >= 1", max_attempts);
+  if (!std::isfinite(retry_collision_weight_factor) || retry_collision_weight_factor < 1.0) {
+    return fail("retry_collision_weight_factor", "a finite number >= 1", retry_collision_weight_factor);
+  }
+  if (temporal_cells_per_piece < 1) {
+    return fail("temporal_cells_per_piece", "an integer >= 1", temporal_cells_per_piece);
+  }
+  if (!std::isfinite(rho) || rho < 0.0) return fail("rho", "a finite number >= 0", rho);
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(limits.max_velocity(a)) || limits.max_velocity(a) <= 0.0) {
+      return fail("limits.max_velocity[" + std::to_string(a) + "]", "a positive number (m/s)",
+                  limits.max_velocity(a));
+    }
+    if (!std::isfinite(limits.max_acceleration(a)) || limits.max_acceleration(a) <= 0.0) {
+      return fail("limits.max_acceleration[" + std::to_string(a) + "]",
+                  "a positive number (m/s^2)", limits.max_acceleration(a));
+    }
+  }
+  std::string sub;
+  if (!search.IsValid(&sub)) {
+    if (error != nullptr) *error = "search." + sub;
+    return false;
+  }
+  if (!spatial.IsValid(&sub)) {
+    if (error != nullptr) *error = "spatial." + sub;
+    return false;
+  }
+  return true;
+}
+
+double MinClearance(const DistanceField& field, const PiecewiseCurve& curve, double step) {
+  double smallest = std::numeric_limits<double>::infinity();
+  Eigen::Matrix3Xd points;
+  Eigen::VectorXd distances;
+  for (int i = 0; i < curve.num_pieces(); ++i) {
+    const PolynomialPiece& piece = curve.piece(i);
+    // Polygon length at 16 samples bounds the sample count from below; the chord steps are then
+    // at most `step` up to the polygon's error (the pieces are smooth quintics).
+    double length = 0.0;
+    Eigen::Vector3d previous = piece.Evaluate(0.0);
+    for (int k = 1; k <= 16; ++k) {
+      const Eigen::Vector3d p = piece.Evaluate(k / 16.0);
+      length += (p - previous).norm();
+      previous = p;
+    }
+    const int n = std::max(16, static_cast<int>(std::ceil(1.25 * length / step)));
+    points.resize(3, n + 1);
+    for (int k = 0; k <= n; ++k) points.col(k) = piece.Evaluate(static_cast<double>(k) / n);
+    field.Distances(points, &distances, nullptr);
+    smallest = std::min(smallest, distances.minCoeff());
+  }
+  return smallest;
+}
+
+Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
+  std::vector<Eigen::Vector3d> out;
+  for (Eigen::Index i = 0; i + 1 < waypoints.cols(); ++i) {
+    const Eigen::Vector3d a = waypoints.col(i), b = waypoints.col(i + 1);
+    const int parts = std::max(1, static_cast<int>(std::ceil((b - a).norm() / max_length)));
+    for (int k = 0; k < parts; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / parts));
+  }
+  if (waypoints.cols() > 0) out.push_back(waypoints.col(waypoints.cols() - 1));
+  Waypoints result(3, static_cast<Eigen::Index>(out.size()));
+  for (size_t k = 0; k < out.size(); ++k) result.col(static_cast<Eigen::Index>(k)) = out[k];
+  return result;
+}
+
+Planner::Planner(const Esdf& esdf) : esdf_(&esdf), search_(esdf) {}
+
+PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                         const PlannerOptions& options) {
+  const auto started = Clock::now();
+  PlanResult result;
+  auto finish = [&](PlanStatus status, std::string message) {
+    result.status = status;
+    result.message = std::move(message);
+    result.times.total_ms = MillisecondsSince(started);
+    return result;
+  };
+  std::string error;
+  if (!options.IsValid(&error)) return finish(PlanStatus::kInvalidInput, "options." + error);
+
+  // ---- front-end ----
+  PathSearchOptions search = options.search;
+  search.robot_radius = options.robot_radius;
+  search.clearance_margin = options.safety_margin;
+  auto t = Clock::now();
+  const PathSearchResult path = search_.Search(start, goal, search);
+  result.times.search_ms = MillisecondsSince(t);
+  if (!path.is_success()) return finish(FromSearch(path.status), path.message);
+  result.waypoints = path.waypoints;
+
+  // ---- spatial stage with post-check and retries ----
+  SpatialOptimizerOptions spatial = options.spatial;
+  spatial.safe_distance = options.robot_radius + options.safety_margin;
+  if (spatial.formulation == SpatialFormulation::kTimeCoupled) {
+    spatial.max_velocity = options.limits.max_velocity.minCoeff();
+    spatial.max_acceleration = options.limits.max_acceleration.minCoeff();
+  }
+  const double required = options.robot_radius + options.clearance_check_margin;
+  bool safe = false;
+  for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
+    const double factor = std::pow(options.retry_collision_weight_factor, attempt);
+    SpatialOptimizerOptions attempt_options = spatial;
+    attempt_options.collision_weight = spatial.collision_weight * factor;
+    const Waypoints joints =
+        SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
+    t = Clock::now();
+    result.spatial = OptimizeSpatialCurve(*esdf_, joints, attempt_options);
+    result.times.spatial_ms += MillisecondsSince(t);
+    result.spatial_attempts = attempt + 1;
+    if (!result.spatial.is_usable()) {
+      return finish(PlanStatus::kSpatialFailure,
+                    std::string("spatial optimization: ") + ToString(result.spatial.status) + ": " +
+                        result.spatial.message);
+    }
+    result.curve = result.spatial.curve;
+    t = Clock::now();
+    result.min_clearance = MinClearance(*esdf_, result.curve, options.clearance_check_step);
+    result.times.check_ms += MillisecondsSince(t);
+    safe = result.min_clearance >= required;
+  }
+  result.path_length = result.curve.ArcLength(1e-6);
+  if (!safe) {
+    std::ostringstream s;
+    s << "the optimized curve comes within " << result.min_clearance
+      << " m of an obstacle (required: robot radius + check margin = " << required << " m) after "
+      << result.spatial_attempts << " attempts";
+    return finish(PlanStatus::kCollision, s.str());
+  }
+
+  // ---- temporal stage ----
+  TemporalProblem problem;
+  problem.curve = result.curve;
+  problem.limits = options.limits;
+  problem.cells_per_piece = options.temporal_cells_per_piece;
+  problem.rho = options.rho;
+  problem.constraint_mode = options.constraint_mode;
+  t = Clock::now();
+  result.temporal = MakeSocpTemporalSolver(options.socp)->Solve(problem);
+  result.times.temporal_ms = MillisecondsSince(t);
+  switch (result.temporal.status) {
+    case TemporalStatus::kOptimal:
+      return finish(PlanStatus::kSuccess, "");
+    case TemporalStatus::kInfeasible:
+      return finish(PlanStatus::kTemporalInfeasible, "temporal stage: " + result.temporal.message);
+    case TemporalStatus::kInvalidInput:
+      return finish(PlanStatus::kInvalidInput, "temporal stage: " + result.temporal.message);
+    default:
+      return finish(PlanStatus::kTemporalFailure,
+                    std::string("temporal stage: ") + ToString(result.temporal.status) + ": " +
+                        result.temporal.message);
+  }
+}
+
+PlanResult Plan(const Esdf& esdf, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                const PlannerOptions& options) {
+  Planner planner(esdf);
+  return planner.Plan(start, goal, options);
+}
+
+}  // namespace timeopt

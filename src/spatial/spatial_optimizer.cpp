@@ -1,0 +1,280 @@
+#include "timeopt/spatial/spatial_optimizer.h"
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include <ceres/ceres.h>
+
+#include "spatial_costs.h"
+
+namespace timeopt {
+namespace {
+
+using spatial_internal::kJointSize;
+
+bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
+
+// Records cost and time of every iteration for the convergence figure.
+class RecordingCallback final : public ceres::IterationCallback {
+ public:
+  explicit RecordingCallback(std::vector<SpatialIteration>* out) : out_(out) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    SpatialIteration it;
+    it.iteration = summary.iteration;
+    // Ceres minimizes 1/2 sum r^2; our objective is sum r^2. Its `cost` is the tried point's.
+    it.step_cost = 2.0 * summary.cost;
+    it.step_accepted = summary.iteration == 0 || summary.step_is_successful;
+    it.cost = it.step_accepted || out_->empty() ? it.step_cost : out_->back().cost;
+    it.time_seconds = summary.cumulative_time_in_seconds;
+    out_->push_back(it);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::vector<SpatialIteration>* out_;
+};
+
+double GroupCost(ceres::Problem& problem, const std::vector<ceres::ResidualBlockId>& blocks) {
+  if (blocks.empty()) return 0.0;
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.residual_blocks = blocks;
+  evaluate.apply_loss_function = false;
+  double cost = 0.0;
+  problem.Evaluate(evaluate, &cost, nullptr, nullptr, nullptr);
+  return 2.0 * cost;
+}
+
+}  // namespace
+
+const char* ToString(SpatialFormulation formulation) {
+  return formulation == SpatialFormulation::kSpatial ? "spatial" : "time_coupled";
+}
+
+const char* ToString(SpatialStatus status) {
+  switch (status) {
+    case SpatialStatus::kConverged: return "converged";
+    case SpatialStatus::kIterationLimit: return "iteration_limit";
+    case SpatialStatus::kInvalidInput: return "invalid_input";
+    case SpatialStatus::kFailure: return "failure";
+  }
+  return "unknown";
+}
+
+bool SpatialOptimizerOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& field, const std::string& expected, double got) {
+    if (error != nullptr) {
+      std::ostringstream s;
+      s << field << ": expected " << expected << ", got " << got;
+      *error = s.str();
+    }
+    return false;
+  };
+  if (!NonNegative(smoothness_weight)) return fail("smoothness_weight", "a finite number >= 0", smoothness_weight);
+  if (!NonNegative(collision_weight)) return fail("collision_weight", "a finite number >= 0", collision_weight);
+  if (!NonNegative(length_weight)) return fail("length_weight", "a finite number >= 0", length_weight);
+  if (!std::isfinite(safe_distance)) return fail("safe_distance", "a finite number", safe_distance);
+  if (!Positive(penalty_decay_length)) return fail("penalty_decay_length", "a positive number", penalty_decay_length);
+  if (collision_samples_per_piece < 1 || collision_samples_per_piece > 64) {
+    return fail("collision_samples_per_piece", "an integer in [1, 64]", collision_samples_per_piece);
+  }
+  if (!Positive(tangent_epsilon)) return fail("tangent_epsilon", "a positive number", tangent_epsilon);
+  if (max_iterations < 0) return fail("max_iterations", "an integer >= 0", max_iterations);
+  if (!Positive(max_solver_time_in_seconds)) {
+    return fail("max_solver_time_in_seconds", "a positive number", max_solver_time_in_seconds);
+  }
+  if (!NonNegative(function_tolerance)) return fail("function_tolerance", "a number >= 0", function_tolerance);
+  if (!NonNegative(gradient_tolerance)) return fail("gradient_tolerance", "a number >= 0", gradient_tolerance);
+  if (!NonNegative(parameter_tolerance)) return fail("parameter_tolerance", "a number >= 0", parameter_tolerance);
+  if (formulation == SpatialFormulation::kTimeCoupled) {
+    if (!Positive(heuristic_speed)) return fail("heuristic_speed", "a positive number", heuristic_speed);
+    if (!Positive(min_piece_duration)) return fail("min_piece_duration", "a positive number", min_piece_duration);
+    if (!Positive(max_velocity)) return fail("max_velocity", "a positive number", max_velocity);
+    if (!Positive(max_acceleration)) return fail("max_acceleration", "a positive number", max_acceleration);
+    if (!NonNegative(dynamic_weight)) return fail("dynamic_weight", "a finite number >= 0", dynamic_weight);
+    if (dynamic_samples_per_piece < 1) {
+      return fail("dynamic_samples_per_piece", "an integer >= 1", dynamic_samples_per_piece);
+    }
+  }
+  return true;
+}
+
+SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& waypoints,
+                                   const SpatialOptimizerOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto started = Clock::now();
+  SpatialResult result;
+  std::string error;
+  if (!options.IsValid(&error)) {
+    result.status = SpatialStatus::kInvalidInput;
+    result.message = "options." + error;
+    return result;
+  }
+  if (waypoints.cols() < 2 || !waypoints.allFinite()) {
+    result.status = SpatialStatus::kInvalidInput;
+    std::ostringstream s;
+    s << "waypoints: expected at least 2 finite columns, got " << waypoints.cols();
+    if (waypoints.cols() >= 2) s << " with a non-finite value";
+    result.message = s.str();
+    return result;
+  }
+  const int m = static_cast<int>(waypoints.cols()) - 1;
+  const bool coupled = options.formulation == SpatialFormulation::kTimeCoupled;
+
+  // Piece durations: 1 in the spatial formulation, heuristic in the baseline.
+  std::vector<double> durations(m, 1.0);
+  if (coupled) {
+    for (int i = 0; i < m; ++i) {
+      const double chord = (waypoints.col(i + 1) - waypoints.col(i)).norm();
+      durations[i] = std::max(chord / options.heuristic_speed, options.min_piece_duration);
+    }
+    result.durations = durations;
+  }
+
+  // Initial joint states from the minimum-jerk spline in s (rest to rest).
+  const PiecewiseCurve initial = MinimumJerkSpline(waypoints);
+  std::vector<double> joints(static_cast<size_t>(kJointSize) * (m + 1), 0.0);
+  for (int j = 0; j <= m; ++j) {
+    double* x = &joints[static_cast<size_t>(kJointSize) * j];
+    Eigen::Map<Eigen::Vector3d> position(x);
+    position = waypoints.col(j);
+    if (j == 0 || j == m) continue;  // rest at the fixed ends
+    Eigen::Vector3d d1 = initial.Evaluate(j, 0.0, 1), d2 = initial.Evaluate(j, 0.0, 2);
+    if (coupled) {
+      const double t = 0.5 * (durations[j - 1] + durations[j]);
+      d1 /= t;
+      d2 /= t * t;
+    }
+    Eigen::Map<Eigen::Vector3d>(x + 3, 3) = d1;
+    Eigen::Map<Eigen::Vector3d>(x + 6, 3) = d2;
+  }
+
+  ceres::Problem problem;
+  const auto& hermite = spatial_internal::QuinticHermite::Get();
+  const Eigen::MatrixXd jerk_factor = hermite.Factor(3);
+  const Eigen::MatrixXd length_factor = hermite.Factor(1);
+  spatial_internal::CollisionPenalty penalty;
+  penalty.safe_distance = options.safe_distance;
+  penalty.decay_length = options.penalty_decay_length;
+  std::vector<ceres::ResidualBlockId> smooth_ids, collision_ids, length_ids, dynamic_ids;
+  for (int i = 0; i < m; ++i) {
+    double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
+    double* x1 = x0 + kJointSize;
+    const double t = durations[i];
+    const Eigen::Matrix<double, 6, 1> scale = spatial_internal::PieceScale(t);
+    // In time: integral_0^T |d3p/dt3|^2 dt = J_s / T^5 and integral_0^T |dp/dt|^2 dt = L_s / T.
+    if (options.smoothness_weight > 0.0) {
+      smooth_ids.push_back(problem.AddResidualBlock(
+          new spatial_internal::QuadraticFormCost(jerk_factor, scale,
+                                                  options.smoothness_weight / std::pow(t, 5)),
+          nullptr, x0, x1));
+    }
+    if (options.length_weight > 0.0) {
+      length_ids.push_back(problem.AddResidualBlock(
+          new spatial_internal::QuadraticFormCost(length_factor, scale, options.length_weight / t),
+          nullptr, x0, x1));
+    }
+    if (options.collision_weight > 0.0) {
+      collision_ids.push_back(problem.AddResidualBlock(
+          new spatial_internal::CollisionCost(&field, penalty, options.collision_samples_per_piece,
+                                              scale, options.collision_weight,
+                                              options.tangent_epsilon),
+          nullptr, x0, x1));
+    }
+    if (coupled && options.dynamic_weight > 0.0) {
+      dynamic_ids.push_back(problem.AddResidualBlock(
+          new spatial_internal::DynamicPenaltyCost(t, options.max_velocity, options.max_acceleration,
+                                                   options.dynamic_samples_per_piece,
+                                                   options.dynamic_weight),
+          nullptr, x0, x1));
+    }
+  }
+  for (int j = 0; j <= m; ++j) {
+    double* x = &joints[static_cast<size_t>(kJointSize) * j];
+    if (!problem.HasParameterBlock(x)) problem.AddParameterBlock(x, kJointSize);
+  }
+  problem.SetParameterBlockConstant(joints.data());
+  problem.SetParameterBlockConstant(&joints[static_cast<size_t>(kJointSize) * m]);
+
+  auto breakdown = [&]() {
+    SpatialCostBreakdown b;
+    b.smoothness = GroupCost(problem, smooth_ids);
+    b.collision = GroupCost(problem, collision_ids);
+    b.length = GroupCost(problem, length_ids);
+    b.dynamic = GroupCost(problem, dynamic_ids);
+    return b;
+  };
+  result.initial_cost = breakdown();
+  if (!std::isfinite(result.initial_cost.total())) {
+    result.status = SpatialStatus::kFailure;
+    result.message = "the initial cost is not finite";
+    return result;
+  }
+
+  if (m >= 2 && problem.NumResidualBlocks() > 0) {
+    ceres::Solver::Options solver;
+    solver.minimizer_type = ceres::TRUST_REGION;
+    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+    solver.linear_solver_type = options.linear_solver == SpatialLinearSolver::kDenseQr
+                                    ? ceres::DENSE_QR
+                                    : ceres::SPARSE_NORMAL_CHOLESKY;
+    solver.max_num_iterations = options.max_iterations;
+    solver.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+    solver.function_tolerance = options.function_tolerance;
+    solver.gradient_tolerance = options.gradient_tolerance;
+    solver.parameter_tolerance = options.parameter_tolerance;
+    solver.num_threads = 1;
+    solver.logging_type = ceres::SILENT;
+    solver.minimizer_progress_to_stdout = false;
+    RecordingCallback callback(&result.iterations);
+    solver.callbacks.push_back(&callback);
+    std::string solver_error;
+    if (!solver.IsValid(&solver_error)) {
+      result.status = SpatialStatus::kInvalidInput;
+      result.message = "ceres options: " + solver_error;
+      return result;
+    }
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    switch (summary.termination_type) {
+      case ceres::CONVERGENCE:
+      case ceres::USER_SUCCESS:
+        result.status = SpatialStatus::kConverged;
+        break;
+      case ceres::NO_CONVERGENCE:
+        result.status = SpatialStatus::kIterationLimit;
+        break;
+      default:
+        result.status = SpatialStatus::kFailure;
+        break;
+    }
+    result.message = summary.message;
+    if (!summary.IsSolutionUsable()) result.status = SpatialStatus::kFailure;
+  } else {
+    // One piece between fixed rest states: nothing to optimize.
+    result.status = SpatialStatus::kConverged;
+    result.message = "no free joint";
+    result.iterations.push_back({0, result.initial_cost.total(), result.initial_cost.total(), 0.0, true});
+  }
+  if (result.status == SpatialStatus::kFailure) {
+    result.solve_time_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+    return result;
+  }
+  result.final_cost = breakdown();
+
+  std::vector<PolynomialPiece> pieces;
+  pieces.reserve(m);
+  for (int i = 0; i < m; ++i) {
+    const double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
+    const Eigen::Matrix<double, 3, 6> q = spatial_internal::PieceData(
+        x0, x0 + kJointSize, spatial_internal::PieceScale(durations[i]));
+    pieces.emplace_back(PolynomialPiece::Coefficients(q * hermite.monomials().transpose()));
+  }
+  result.curve = PiecewiseCurve(std::move(pieces));
+  result.solve_time_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  return result;
+}
+
+}  // namespace timeopt
