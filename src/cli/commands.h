@@ -21,5 +21,6 @@ void RegisterCurveCommand(CLI::App& app, Runner& run);
 void RegisterTemporalCommand(CLI::App& app, Runner& run);
 void RegisterWaypointsCommand(CLI::App& app, Runner& run);
 void RegisterMapCommand(CLI::App& app, Runner& run);
+void RegisterPlanCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   RegisterTemporalCommand(app, run);
   RegisterWaypointsCommand(app, run);
   RegisterMapCommand(app, run);
+  RegisterPlanCommand(app, run);
 
   try {
     app.parse(argc, argv);

@@ -104,26 +104,75 @@ bool PlannerOptions::IsValid(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// Samples of a piece at chord steps of at most `step` (polygon length at 16 samples, +25%).
+void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* points) {
+  double length = 0.0;
+  Eigen::Vector3d previous = piece.Evaluate(0.0);
+  for (int k = 1; k <= 16; ++k) {
+    const Eigen::Vector3d p = piece.Evaluate(k / 16.0);
+    length += (p - previous).norm();
+    previous = p;
+  }
+  const int n = std::max(16, static_cast<int>(std::ceil(1.25 * length / step)));
+  points->resize(3, n + 1);
+  for (int k = 0; k <= n; ++k) points->col(k) = piece.Evaluate(static_cast<double>(k) / n);
+}
+
+}  // namespace
+
+double VoxelClearance(const Esdf& esdf, const Eigen::Vector3d& point, double reach) {
+  const double r = esdf.resolution();
+  const VoxelBox& box = esdf.box();
+  const Eigen::Vector3i lo =
+      ((point.array() - reach) / r).floor().cast<int>().max(box.min.array()).matrix();
+  const Eigen::Vector3i hi = ((point.array() + reach) / r)
+                                 .floor()
+                                 .cast<int>()
+                                 .min((box.end() - Eigen::Vector3i::Ones()).array())
+                                 .matrix();
+  double best = reach;
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const Eigen::Vector3i index(x, y, z);
+        if (esdf.VoxelDistance(index) >= 0.0) continue;  // free voxel
+        const Eigen::Vector3d corner = index.cast<double>() * r;
+        const Eigen::Vector3d nearest =
+            point.cwiseMax(corner).cwiseMin(corner + Eigen::Vector3d::Constant(r));
+        best = std::min(best, (point - nearest).norm());
+      }
+    }
+  }
+  return best;
+}
+
 double MinClearance(const DistanceField& field, const PiecewiseCurve& curve, double step) {
   double smallest = std::numeric_limits<double>::infinity();
   Eigen::Matrix3Xd points;
   Eigen::VectorXd distances;
   for (int i = 0; i < curve.num_pieces(); ++i) {
-    const PolynomialPiece& piece = curve.piece(i);
-    // Polygon length at 16 samples bounds the sample count from below; the chord steps are then
-    // at most `step` up to the polygon's error (the pieces are smooth quintics).
-    double length = 0.0;
-    Eigen::Vector3d previous = piece.Evaluate(0.0);
-    for (int k = 1; k <= 16; ++k) {
-      const Eigen::Vector3d p = piece.Evaluate(k / 16.0);
-      length += (p - previous).norm();
-      previous = p;
-    }
-    const int n = std::max(16, static_cast<int>(std::ceil(1.25 * length / step)));
-    points.resize(3, n + 1);
-    for (int k = 0; k <= n; ++k) points.col(k) = piece.Evaluate(static_cast<double>(k) / n);
+    SamplePiece(curve.piece(i), step, &points);
     field.Distances(points, &distances, nullptr);
     smallest = std::min(smallest, distances.minCoeff());
+  }
+  return smallest;
+}
+
+double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double step,
+                         double exact_below) {
+  double smallest = std::numeric_limits<double>::infinity();
+  Eigen::Matrix3Xd points;
+  Eigen::VectorXd distances;
+  for (int i = 0; i < curve.num_pieces(); ++i) {
+    SamplePiece(curve.piece(i), step, &points);
+    esdf.Distances(points, &distances, nullptr);
+    for (Eigen::Index k = 0; k < points.cols(); ++k) {
+      double d = distances(k);
+      if (d < exact_below) d = VoxelClearance(esdf, points.col(k), exact_below);
+      smallest = std::min(smallest, d);
+    }
   }
   return smallest;
 }
@@ -173,7 +222,16 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     spatial.max_velocity = options.limits.max_velocity.minCoeff();
     spatial.max_acceleration = options.limits.max_acceleration.minCoeff();
   }
-  const double required = options.robot_radius + options.clearance_check_margin;
+  // Exact against the voxels where the field is below radius + check margin; between samples the
+  // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
+  // less than radius + half a step lowers the requirement to its own clearance (never below the
+  // radius).
+  const double exact_below = options.robot_radius + options.clearance_check_margin;
+  const double half_step = 0.5 * options.clearance_check_step;
+  const double required = std::max(
+      options.robot_radius,
+      std::min({options.robot_radius + half_step, VoxelClearance(*esdf_, start, exact_below),
+                VoxelClearance(*esdf_, goal, exact_below)}));
   bool safe = false;
   for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
     const double factor = std::pow(options.retry_collision_weight_factor, attempt);
@@ -192,7 +250,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     }
     result.curve = result.spatial.curve;
     t = Clock::now();
-    result.min_clearance = MinClearance(*esdf_, result.curve, options.clearance_check_step);
+    result.min_clearance =
+        MinVoxelClearance(*esdf_, result.curve, options.clearance_check_step, exact_below);
     result.times.check_ms += MillisecondsSince(t);
     safe = result.min_clearance >= required;
   }
@@ -200,7 +259,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   if (!safe) {
     std::ostringstream s;
     s << "the optimized curve comes within " << result.min_clearance
-      << " m of an obstacle (required: robot radius + check margin = " << required << " m) after "
+      << " m of an obstacle (required: " << required << " m) after "
       << result.spatial_attempts << " attempts";
     return finish(PlanStatus::kCollision, s.str());
   }

@@ -1,0 +1,192 @@
+// The planner's evaluation on the forest_gen maps (Oleynikova et al., IROS 2016) with their
+// start/goal pairs: ../shared/maps/forest_gen/forest0..4.bt and start_and_end.csv (100 pairs per
+// map). For every robot radius and formulation (the decoupled spatial stage and the time-coupled
+// baseline) it plans every pair and writes one CSV row per plan, then prints a summary table:
+// success rate, median and 95th percentile of each stage's time, trajectory duration.
+// Times are wall-clock per plan once the map's ESDF is built (ESDF build time reported apart).
+// Usage: experiment_planner_forest [--shared DIR] [--out FILE.csv] [--radius R ...]
+//                                  [--formulation spatial|time_coupled|both] [--max-pairs N]
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "timeopt/map/esdf.h"
+#include "timeopt/map/occupancy_map.h"
+#include "timeopt/spatial/planner.h"
+
+namespace {
+
+using namespace timeopt;
+
+struct Pair {
+  int trial = 0, map_id = 0;
+  Eigen::Vector3d start, goal;
+};
+
+std::vector<Pair> ReadPairs(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  std::vector<Pair> pairs;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream s(line);
+    Pair p;
+    s >> p.trial >> p.map_id >> p.start.x() >> p.start.y() >> p.start.z() >> p.goal.x() >>
+        p.goal.y() >> p.goal.z();
+    if (s) pairs.push_back(p);
+  }
+  return pairs;
+}
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(pos));
+  const size_t j = std::min(i + 1, v.size() - 1);
+  return v[i] + (pos - i) * (v[j] - v[i]);
+}
+
+struct Row {
+  double radius;
+  std::string formulation;
+  int map_id, trial;
+  PlanResult plan;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Planner evaluation on the forest_gen maps"};
+  std::string shared = "../shared";
+  std::string out = "results/planner_forest.csv";
+  std::vector<double> radii = {0.3, 0.5};
+  std::string formulation = "both";
+  int max_pairs = 1000;
+  PlannerOptions base;
+  app.add_option("--shared", shared, "Directory holding maps/forest_gen")->capture_default_str();
+  app.add_option("--out", out, "CSV file, one row per plan")->capture_default_str();
+  app.add_option("--radius", radii, "Robot radii, metres")->capture_default_str();
+  app.add_option("--formulation", formulation, "spatial, time_coupled or both")
+      ->check(CLI::IsMember({"spatial", "time_coupled", "both"}))
+      ->capture_default_str();
+  app.add_option("--max-pairs", max_pairs, "Pairs per map (at most)")->capture_default_str();
+  app.add_option("--max-segment-length", base.max_segment_length, "PlannerOptions::max_segment_length, m")
+      ->capture_default_str();
+  app.add_option("--cells", base.temporal_cells_per_piece, "Temporal cells per piece K")
+      ->capture_default_str();
+  double vmax = 2.0, amax = 2.0;  // the `timeopt plan` defaults
+  app.add_option("--max-velocity", vmax, "Per-axis velocity limit, m/s")->capture_default_str();
+  app.add_option("--max-acceleration", amax, "Per-axis acceleration limit, m/s^2")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  base.limits.max_velocity.setConstant(vmax);
+  base.limits.max_acceleration.setConstant(amax);
+
+  const std::string dir = shared + "/maps/forest_gen";
+  std::vector<Pair> pairs;
+  try {
+    pairs = ReadPairs(dir + "/start_and_end.csv");
+  } catch (const std::exception& e) {
+    std::cerr << e.what() << "\n";
+    return 2;
+  }
+  std::vector<SpatialFormulation> formulations;
+  if (formulation != "time_coupled") formulations.push_back(SpatialFormulation::kSpatial);
+  if (formulation != "spatial") formulations.push_back(SpatialFormulation::kTimeCoupled);
+
+  std::vector<Row> rows;
+  std::vector<double> esdf_ms;
+  for (int map_id = 0; map_id < 5; ++map_id) {
+    const std::string path = dir + "/forest" + std::to_string(map_id) + ".bt";
+    const OccupancyMap map = OccupancyMap::Load(path);
+    const auto t0 = std::chrono::steady_clock::now();
+    const Esdf esdf = Esdf::FromMap(map);
+    esdf_ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    Planner planner(esdf);
+    for (double radius : radii) {
+      for (SpatialFormulation f : formulations) {
+        int count = 0;
+        for (const Pair& p : pairs) {
+          if (p.map_id != map_id || count++ >= max_pairs) continue;
+          PlannerOptions options = base;
+          options.robot_radius = radius;
+          options.spatial.formulation = f;
+          rows.push_back({radius, ToString(f), map_id, p.trial, planner.Plan(p.start, p.goal, options)});
+        }
+      }
+    }
+  }
+
+  std::ofstream csv(out);
+  csv << "# experiment_planner_forest: maps " << dir << ", PlannerOptions defaults except vmax "
+      << base.limits.max_velocity.x() << " m/s, amax " << base.limits.max_acceleration.x()
+      << " m/s^2 per axis, K " << base.temporal_cells_per_piece << ", max_segment_length "
+      << base.max_segment_length << " m, certified constraints\n";
+  csv << "radius,formulation,map_id,trial,status,attempts,pieces,search_ms,spatial_ms,check_ms,"
+         "temporal_ms,total_ms,iterations,path_length,min_clearance,duration,baseline_duration\n";
+  for (const Row& r : rows) {
+    double baseline = 0.0;
+    for (double d : r.plan.spatial.durations) baseline += d;
+    csv << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << ","
+        << ToString(r.plan.status) << "," << r.plan.spatial_attempts << ","
+        << r.plan.curve.num_pieces() << "," << r.plan.times.search_ms << ","
+        << r.plan.times.spatial_ms << "," << r.plan.times.check_ms << ","
+        << r.plan.times.temporal_ms << "," << r.plan.times.total_ms << ","
+        << r.plan.spatial.iterations.size() << "," << r.plan.path_length << ","
+        << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0)
+        << "," << baseline << "\n";
+  }
+
+  std::cout << "ESDF build per map (ms): ";
+  for (double v : esdf_ms) std::cout << std::fixed << std::setprecision(1) << v << " ";
+  std::cout << "\n\n| radius | formulation | success | failures | search ms (med/p95) | spatial ms "
+               "(med/p95) | check ms (med/p95) | temporal ms (med/p95) | total ms (med/p95) | "
+               "duration s (med/p95) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (double radius : radii) {
+    for (SpatialFormulation f : formulations) {
+      std::vector<double> search, spatial, check, temporal, total, duration;
+      int n = 0, ok = 0;
+      std::map<std::string, int> failures;
+      for (const Row& r : rows) {
+        if (r.radius != radius || r.formulation != ToString(f)) continue;
+        ++n;
+        if (!r.plan.is_success()) {
+          ++failures[ToString(r.plan.status)];
+          continue;
+        }
+        ++ok;
+        search.push_back(r.plan.times.search_ms);
+        spatial.push_back(r.plan.times.spatial_ms);
+        check.push_back(r.plan.times.check_ms);
+        temporal.push_back(r.plan.times.temporal_ms);
+        total.push_back(r.plan.times.total_ms);
+        duration.push_back(r.plan.temporal.total_time);
+      }
+      std::ostringstream fail;
+      for (const auto& [k, v] : failures) fail << k << " " << v << " ";
+      auto mp = [](const std::vector<double>& v) {
+        std::ostringstream s;
+        s << std::fixed << std::setprecision(2) << Percentile(v, 0.5) << " / " << Percentile(v, 0.95);
+        return s.str();
+      };
+      std::cout << "| " << radius << " | " << ToString(f) << " | " << ok << "/" << n << " | "
+                << fail.str() << " | " << mp(search) << " | " << mp(spatial) << " | " << mp(check)
+                << " | " << mp(temporal) << " | " << mp(total) << " | " << mp(duration) << " |\n";
+    }
+  }
+  std::cout << "\nrows: " << out << "\n";
+  return 0;
+}
