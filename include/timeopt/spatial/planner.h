@@ -41,7 +41,8 @@ struct PlannerOptions {
   // could be closer than the radius.
   double clearance_check_margin = 0.15;
   // Sampling step of the post-check along the curve, metres (upper bound; chord length). The curve
-  // must keep robot_radius + step / 2 at the samples, so it keeps the radius between them.
+  // must keep robot_radius + step / 2 at the samples, so it keeps the radius between them. A curve
+  // that keeps the radius but not the half step is checked again at step / 8 (margin step / 16).
   double clearance_check_step = 0.02;
 
   // Front-end. robot_radius and clearance_margin are overwritten from the fields above.
@@ -55,8 +56,8 @@ struct PlannerOptions {
   // (smallest axis).
   SpatialOptimizerOptions spatial;
   // Attempts of the spatial stage: attempt k (0-based) multiplies the collision weight by
-  // retry_collision_weight_factor^k and divides max_segment_length by 2^k. 3 attempts.
-  int max_attempts = 3;
+  // retry_collision_weight_factor^k and divides max_segment_length by 2^k. 4 attempts.
+  int max_attempts = 4;
   double retry_collision_weight_factor = 4.0;
 
   // Temporal stage.
