@@ -8,6 +8,7 @@
 //                                  [--formulation spatial|time_coupled|both] [--max-pairs N]
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -20,6 +21,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "timeopt/io/plot.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/spatial/planner.h"
@@ -196,6 +198,52 @@ int main(int argc, char** argv) {
     }
   }
   std::cout << "\n";
+
+  // Convergence figure (like the paper's Fig. 4c): median cost / initial cost against solver time,
+  // both formulations, one panel per radius.
+  std::vector<PlotPanel> panels;
+  for (double radius : radii) {
+    PlotPanel panel;
+    std::ostringstream title;
+    title << "spatial optimizer convergence on forest_gen pairs, robot radius " << radius
+          << " m (median over plans)";
+    panel.title = title.str();
+    panel.x_label = "solver time (ms)";
+    panel.y_label = "cost / initial cost";
+    panel.log_y = true;
+    for (SpatialFormulation f : formulations) {
+      PlotSeries series;
+      series.label = ToString(f);
+      series.rgb = f == SpatialFormulation::kSpatial ? std::array<double, 3>{0.85, 0.1, 0.1}
+                                                     : std::array<double, 3>{0.1, 0.3, 0.8};
+      for (double t_ms = 0.0; t_ms <= 10.0 + 1e-9; t_ms += 0.25) {
+        std::vector<double> values;
+        for (const Row& r : rows) {
+          if (r.radius != radius || r.formulation != ToString(f)) continue;
+          const auto& its = r.plan.spatial.iterations;
+          if (its.empty() || !(its.front().cost > 0.0)) continue;
+          double c = its.front().cost;
+          for (const SpatialIteration& it : its) {
+            if (it.time_seconds * 1e3 > t_ms) break;
+            c = it.cost;
+          }
+          values.push_back(c / its.front().cost);
+        }
+        if (values.empty()) continue;
+        series.x.push_back(t_ms);
+        series.y.push_back(Percentile(values, 0.5));
+      }
+      panel.series.push_back(series);
+    }
+    panels.push_back(panel);
+  }
+  const std::string plot_path = iterations_path.substr(0, iterations_path.size() - 4) + ".png";
+  try {
+    WritePlotPng(panels, plot_path);
+    std::cout << "convergence plot: " << plot_path << "\n\n";
+  } catch (const std::exception& e) {
+    std::cerr << "convergence plot not written: " << e.what() << "\n";
+  }
 
   std::cout << "ESDF build per map (ms): ";
   for (double v : esdf_ms) std::cout << std::fixed << std::setprecision(1) << v << " ";

@@ -1,6 +1,6 @@
 // `timeopt plan [--map MAP] [--start x,y,z] [--goal x,y,z] [--max-velocity V]
 //               [--max-acceleration A] [--robot-radius R] [--config FILE.json] [--output TRAJ.csv]
-//               [--plot PLOT.png]`
+//               [--plot PLOT.png] [--unknown free|occupied]`
 // Front-end search, spatial optimization and temporal stage on an OctoMap file; prints a summary
 // JSON on stdout. Without --map it plans on the shipped default map (kDefault* below) and writes
 // results/plan.csv and results/plan.png.
@@ -46,6 +46,7 @@ constexpr const char* kDefaultPlot = "results/plan.png";
 
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
+  std::string unknown = "free";
   std::optional<double> max_velocity, max_acceleration, robot_radius;
 };
 
@@ -210,7 +211,8 @@ int RunPlan(PlanArgs args) {
   if (!options.IsValid(&error)) throw std::invalid_argument("options: " + error);
 
   using Clock = std::chrono::steady_clock;
-  const OccupancyMap map = OccupancyMap::Load(args.map);
+  const OccupancyMap map = OccupancyMap::Load(
+      args.map, args.unknown == "occupied" ? UnknownSpace::kOccupied : UnknownSpace::kFree);
   auto t = Clock::now();
   const Esdf esdf = Esdf::FromMap(map);
   const double esdf_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
@@ -284,6 +286,10 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--robot-radius", args->robot_radius, "Robot radius, metres (default 0.3)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--unknown", args->unknown,
+                  "Unobserved voxels inside the map's box: free (optimistic) or occupied")
+      ->check(CLI::IsMember({"free", "occupied"}))
+      ->capture_default_str();
   sub->add_option("--config", args->config, "Planner options JSON (see the source's header)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");

@@ -163,8 +163,14 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   const int32_t start_index = linear(start_local), goal_index = linear(goal_local);
   const double inflated = radius + options.clearance_margin;
   const double eps = options.heuristic_weight;
+  // The 26-connected grid distance (octile in 3-D), in voxels: the length of the shortest lattice
+  // path ignoring obstacles. Admissible (every step costs at least its length) and much tighter
+  // than the Euclidean distance, so far fewer voxels are expanded.
   auto heuristic = [&](const Eigen::Vector3i& l) {
-    return eps * (l - goal_local).cast<double>().norm();  // in voxels
+    Eigen::Vector3i d = (l - goal_local).cwiseAbs();
+    std::sort(d.data(), d.data() + 3);  // d(0) <= d(1) <= d(2)
+    constexpr double kSqrt2 = 1.4142135623730951, kSqrt3 = 1.7320508075688772;
+    return eps * (kSqrt3 * d(0) + kSqrt2 * (d(1) - d(0)) + (d(2) - d(1)));
   };
 
   using Entry = std::pair<float, int32_t>;

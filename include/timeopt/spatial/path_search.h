@@ -7,7 +7,8 @@
 // radius (hard). Below robot radius + clearance margin a step costs more (soft), so the search
 // prefers wide gaps but still threads a gap that is only slightly wider than the robot:
 //   step cost = step length * (1 + clearance_cost_weight * max(0, r + margin - d) / margin).
-// The heuristic is the Euclidean distance (admissible: every step costs at least its length).
+// The heuristic is the 26-connected lattice distance (admissible: every step costs at least its
+// length), times heuristic_weight.
 //
 // A PathSearch keeps its work arrays between calls (no allocation per search after the first on
 // a map); it is not thread-safe, one object per thread.
