@@ -139,6 +139,18 @@ TEST(SpatialOptimizer, ReportedCostNeverIncreasesAndCollisionDrops) {
       if (formulation == SpatialFormulation::kSpatial) {
         // C2 in s by construction (shared joint states): round-off only.
         EXPECT_GE(result.curve.Continuity(2).ContinuousUpTo(1e-9), 2);
+      } else {
+        // C2 in time: f_i'(1) / T_i = f_{i+1}'(0) / T_{i+1} and the same with T^2 for f''.
+        ASSERT_EQ(result.durations.size(), static_cast<size_t>(result.curve.num_pieces()));
+        for (int i = 0; i + 1 < result.curve.num_pieces(); ++i) {
+          const double t0 = result.durations[i], t1 = result.durations[i + 1];
+          for (int d = 1; d <= 2; ++d) {
+            const Eigen::Vector3d left = result.curve.Evaluate(i, 1.0, d) / std::pow(t0, d);
+            const Eigen::Vector3d right = result.curve.Evaluate(i + 1, 0.0, d) / std::pow(t1, d);
+            // Round-off of the coefficient products (values of order 1-10): 1e-9.
+            EXPECT_LT((left - right).norm(), 1e-9) << "joint " << i << " order " << d;
+          }
+        }
       }
     }
   }
