@@ -1,0 +1,95 @@
+// Planner stages on a generated 10 x 10 x 3 m forest at 0.1 m (GenerateForest, 0.12 trees/m^2,
+// seed 1; no files needed): front-end search, spatial optimization (both formulations) and the
+// whole plan, over 16 fixed random start/goal pairs at 1.5 m height cycled through the
+// iterations. The forest_gen evaluation with success rates and percentiles is
+// experiments/planner_forest.cpp.
+
+#include <memory>
+#include <random>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "timeopt/map/esdf.h"
+#include "timeopt/map/map_generators.h"
+#include "timeopt/spatial/path_search.h"
+#include "timeopt/spatial/planner.h"
+#include "timeopt/spatial/spatial_optimizer.h"
+
+namespace {
+
+using namespace timeopt;
+
+struct Scene {
+  std::unique_ptr<Esdf> esdf;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
+  std::vector<Waypoints> joints;  // split front-end waypoints of every pair
+};
+
+const Scene& GetScene() {
+  static const Scene scene = [] {
+    Scene s;
+    ForestOptions forest;
+    forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 10, 3));
+    forest.density = 0.12;
+    forest.seed = 1;
+    s.esdf = std::make_unique<Esdf>(GenerateForest(forest));
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> lo(0.5, 3.0), hi(7.0, 9.5);
+    PathSearch search(*s.esdf);
+    const PlannerOptions options;
+    while (s.pairs.size() < 16) {
+      const Eigen::Vector3d a(lo(rng), lo(rng), 1.5), b(hi(rng), hi(rng), 1.5);
+      if (s.esdf->Distance(a) < 0.5 || s.esdf->Distance(b) < 0.5) continue;
+      const PathSearchResult r = search.Search(a, b);
+      if (!r.is_success()) continue;
+      s.pairs.emplace_back(a, b);
+      s.joints.push_back(SplitSegments(r.waypoints, options.max_segment_length));
+    }
+    return s;
+  }();
+  return scene;
+}
+
+void BM_PathSearch(benchmark::State& state) {
+  const Scene& s = GetScene();
+  PathSearch search(*s.esdf);
+  size_t i = 0;
+  for (auto _ : state) {
+    const auto& [a, b] = s.pairs[i++ % s.pairs.size()];
+    benchmark::DoNotOptimize(search.Search(a, b));
+  }
+}
+BENCHMARK(BM_PathSearch)->Unit(benchmark::kMillisecond);
+
+void BM_SpatialOptimizer(benchmark::State& state) {
+  const Scene& s = GetScene();
+  SpatialOptimizerOptions options;
+  options.formulation =
+      state.range(0) == 0 ? SpatialFormulation::kSpatial : SpatialFormulation::kTimeCoupled;
+  options.safe_distance = 0.5;
+  state.SetLabel(ToString(options.formulation));
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(OptimizeSpatialCurve(*s.esdf, s.joints[i++ % s.joints.size()], options));
+  }
+}
+BENCHMARK(BM_SpatialOptimizer)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_Plan(benchmark::State& state) {
+  const Scene& s = GetScene();
+  Planner planner(*s.esdf);
+  PlannerOptions options;
+  options.limits.max_velocity.setConstant(2.0);
+  options.limits.max_acceleration.setConstant(2.0);
+  size_t i = 0, failures = 0;
+  for (auto _ : state) {
+    const auto& [a, b] = s.pairs[i++ % s.pairs.size()];
+    const PlanResult r = planner.Plan(a, b, options);
+    failures += r.is_success() ? 0 : 1;
+  }
+  state.counters["failures"] = static_cast<double>(failures);
+}
+BENCHMARK(BM_Plan)->Unit(benchmark::kMillisecond);
+
+}  // namespace
