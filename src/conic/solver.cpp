@@ -118,6 +118,55 @@ struct SocBlock {
 
 constexpr double kSqrtHalf = 0.70710678118654752440;
 
+// Per-cone kernels, templated on the dimension: D = 3 (most cones of path-like problems) is fully
+// unrolled by the compiler, D = 0 reads the dimension at run time.
+template <int D>
+inline void ApplyWCone(const double* w, double eta, const double* v, double* o, int dim) {
+  const int d = D > 0 ? D : dim;
+  double w1v1 = 0.0;
+  for (int i = 1; i < d; ++i) w1v1 += w[i] * v[i];
+  const double coef = v[0] + w1v1 / (1.0 + w[0]);
+  const double v0 = v[0];
+  o[0] = eta * (w[0] * v0 + w1v1);
+  for (int i = 1; i < d; ++i) o[i] = eta * (v[i] + coef * w[i]);
+}
+
+// Largest step a with u + a d in the cone (u strictly inside): infinity if unbounded, 0 if u is not
+// strictly inside.
+template <int D>
+inline double MaxStepCone(const double* uv, const double* dv, int dim) {
+  const int d = D > 0 ? D : dim;
+  double u1 = 0.0, d1 = 0.0, ud = 0.0;
+  for (int i = 1; i < d; ++i) {
+    u1 += uv[i] * uv[i];
+    d1 += dv[i] * dv[i];
+    ud += uv[i] * dv[i];
+  }
+  // f(a) = qa a^2 + 2 qb a + qc is the cone's determinant along the ray; the step ends at its
+  // smallest positive root (f > 0 on [0, root) keeps u + a d inside the cone).
+  const double qa = dv[0] * dv[0] - d1;
+  const double qb = uv[0] * dv[0] - ud;
+  const double un = std::sqrt(u1);
+  const double qc = (uv[0] - un) * (uv[0] + un);
+  if (!(qc > 0.0)) return 0.0;
+  double root = std::numeric_limits<double>::infinity();
+  if (qa == 0.0) {
+    if (qb < 0.0) root = -qc / (2.0 * qb);
+  } else {
+    const double disc = qb * qb - qa * qc;
+    if (disc >= 0.0) {
+      const double q = -(qb + std::copysign(std::sqrt(disc), qb));
+      const double r1 = q / qa;
+      const double r2 = q != 0.0 ? qc / q : std::numeric_limits<double>::infinity();
+      if (r1 > 0.0) root = std::min(root, r1);
+      if (r2 > 0.0) root = std::min(root, r2);
+    }
+  }
+  // Guard: the first coordinate must also stay positive.
+  if (dv[0] < 0.0) root = std::min(root, -uv[0] / dv[0]);
+  return root;
+}
+
 }  // namespace
 
 struct Solver::Workspace {
@@ -191,6 +240,10 @@ struct Solver::Workspace {
   // Solves K sol = rhs (unpermuted vectors) with iterative refinement on the unregularized matrix.
   void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                 int max_refinement_steps);
+  // Iterative refinement of sol (an approximate solution of K sol = rhs, unpermuted) on the
+  // unregularized matrix.
+  void RefineKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
+                 int max_refinement_steps);
   void KktMultiplyUnregularized(const double* v, double* out) const;  // permuted space
 };
 
@@ -490,10 +543,13 @@ void Solver::Workspace::LoadValues(const Problem& problem, const Options& option
 // Cone operations. Orthant rows [0, num_orthant), then the second-order cones in `socs`.
 
 bool Solver::Workspace::ComputeScaling() {
-  for (int i = 0; i < num_orthant; ++i) {
-    if (!(s[i] > 0.0 && z[i] > 0.0)) return false;
-    w_orthant[i] = std::sqrt(s[i] / z[i]);
-    lambda[i] = w_orthant[i] * z[i];
+  if (num_orthant > 0) {
+    // Branch-free (vectorized) passes; the interior test first.
+    const auto so = s.head(num_orthant).array();
+    const auto zo = z.head(num_orthant).array();
+    if (!(so.minCoeff() > 0.0 && zo.minCoeff() > 0.0)) return false;  // also catches NaN
+    w_orthant.head(num_orthant).array() = (so / zo).sqrt();
+    lambda.head(num_orthant).array() = (so * zo).sqrt();  // w z = sqrt(s z)
   }
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
@@ -530,13 +586,11 @@ bool Solver::Workspace::ComputeScaling() {
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
     const double* w = wbar.data() + blk.start;
-    const double* zv = z.data() + blk.start;
-    double* l = lambda.data() + blk.start;
-    double w1z1 = 0.0;
-    for (int i = 1; i < blk.dim; ++i) w1z1 += w[i] * zv[i];
-    l[0] = eta[k] * (w[0] * zv[0] + w1z1);
-    const double coef = zv[0] + w1z1 / (1.0 + w[0]);
-    for (int i = 1; i < blk.dim; ++i) l[i] = eta[k] * (zv[i] + coef * w[i]);
+    if (blk.dim == 3) {
+      ApplyWCone<3>(w, eta[k], z.data() + blk.start, lambda.data() + blk.start, 3);
+    } else {
+      ApplyWCone<0>(w, eta[k], z.data() + blk.start, lambda.data() + blk.start, blk.dim);
+    }
   }
   return true;
 }
@@ -555,13 +609,11 @@ void Solver::Workspace::ApplyW(const double* in, double* out) const {
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
     const double* w = wbar.data() + blk.start;
-    const double* v = in + blk.start;
-    double* o = out + blk.start;
-    double w1v1 = 0.0;
-    for (int i = 1; i < blk.dim; ++i) w1v1 += w[i] * v[i];
-    const double coef = v[0] + w1v1 / (1.0 + w[0]);
-    o[0] = eta[k] * (w[0] * v[0] + w1v1);
-    for (int i = 1; i < blk.dim; ++i) o[i] = eta[k] * (v[i] + coef * w[i]);
+    if (blk.dim == 3) {
+      ApplyWCone<3>(w, eta[k], in + blk.start, out + blk.start, 3);
+    } else {
+      ApplyWCone<0>(w, eta[k], in + blk.start, out + blk.start, blk.dim);
+    }
   }
 }
 
@@ -615,40 +667,16 @@ void Solver::Workspace::JordanDivide(const double* l, const double* v, double* o
 
 double Solver::Workspace::MaxStep(const double* u, const double* d) const {
   double alpha = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < num_orthant; ++i) {
-    if (d[i] < 0.0) alpha = std::min(alpha, -u[i] / d[i]);
+  {
+    // Branch-free: the largest -d_i / u_i (u > 0) gives the smallest ratio u_i / -d_i.
+    double worst = 0.0;
+    for (int i = 0; i < num_orthant; ++i) worst = std::max(worst, -d[i] / u[i]);
+    if (worst > 0.0) alpha = 1.0 / worst;
   }
   for (const SocBlock& blk : socs) {
-    const double* uv = u + blk.start;
-    const double* dv = d + blk.start;
-    double u1 = 0.0, d1 = 0.0, ud = 0.0;
-    for (int i = 1; i < blk.dim; ++i) {
-      u1 += uv[i] * uv[i];
-      d1 += dv[i] * dv[i];
-      ud += uv[i] * dv[i];
-    }
-    // f(a) = qa a^2 + 2 qb a + qc is the cone's determinant along the ray; the step ends at its
-    // smallest positive root (f > 0 on [0, root) keeps u + a d inside the cone).
-    const double qa = dv[0] * dv[0] - d1;
-    const double qb = uv[0] * dv[0] - ud;
-    const double un = std::sqrt(u1);
-    const double qc = (uv[0] - un) * (uv[0] + un);
-    if (!(qc > 0.0)) return 0.0;
-    double root = std::numeric_limits<double>::infinity();
-    if (qa == 0.0) {
-      if (qb < 0.0) root = -qc / (2.0 * qb);
-    } else {
-      const double disc = qb * qb - qa * qc;
-      if (disc >= 0.0) {
-        const double q = -(qb + std::copysign(std::sqrt(disc), qb));
-        const double r1 = q / qa;
-        const double r2 = q != 0.0 ? qc / q : std::numeric_limits<double>::infinity();
-        if (r1 > 0.0) root = std::min(root, r1);
-        if (r2 > 0.0) root = std::min(root, r2);
-      }
-    }
-    // Guard: the first coordinate must also stay positive.
-    if (dv[0] < 0.0) root = std::min(root, -uv[0] / dv[0]);
+    const double root = blk.dim == 3 ? MaxStepCone<3>(u + blk.start, d + blk.start, 3)
+                                     : MaxStepCone<0>(u + blk.start, d + blk.start, blk.dim);
+    if (root == 0.0) return 0.0;
     alpha = std::min(alpha, root);
   }
   return alpha;
@@ -666,9 +694,7 @@ double Solver::Workspace::MinEigenvalue(const double* u) const {
 }
 
 bool Solver::Workspace::StrictlyInterior(const double* u) const {
-  for (int i = 0; i < num_orthant; ++i) {
-    if (!(u[i] > 0.0)) return false;
-  }
+  if (num_orthant > 0 && !(Eigen::Map<const Eigen::VectorXd>(u, num_orthant).minCoeff() > 0.0)) return false;
   for (const SocBlock& blk : socs) {
     double n1 = 0.0;
     for (int i = 1; i < blk.dim; ++i) n1 += u[blk.start + i] * u[blk.start + i];
@@ -749,30 +775,41 @@ void Solver::Workspace::KktMultiplyUnregularized(const double* v, double* out) c
 
 void Solver::Workspace::SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                                  int max_refinement_steps) {
-  for (int k = 0; k < num_kkt; ++k) perm_rhs[k] = rhs[perm[k]];
-  perm_sol = perm_rhs;
+  for (int k = 0; k < num_kkt; ++k) perm_sol[k] = rhs[perm[k]];
   ldl.Solve(perm_sol.data());
-  if (max_refinement_steps > 0) {
-    const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
-    KktMultiplyUnregularized(perm_sol.data(), perm_res.data());
-    perm_res = perm_rhs - perm_res;
-    double norm = NormInf(perm_res.data(), num_kkt);
-    for (int step = 0; step < max_refinement_steps && norm > bound; ++step) {
-      // Candidate x + K~^{-1} r, accepted only if it reduces the residual of the exact system.
-      perm_corr = perm_res;
-      ldl.Solve(perm_corr.data());
-      perm_corr += perm_sol;
-      KktMultiplyUnregularized(perm_corr.data(), perm_res.data());
-      perm_res = perm_rhs - perm_res;
-      const double new_norm = NormInf(perm_res.data(), num_kkt);
-      ++refinement_counter;
-      if (!(new_norm < norm)) break;  // no progress (or NaN): keep the previous solution
-      perm_sol.swap(perm_corr);
-      if (new_norm > options.refinement_stagnation * norm) break;  // slow: not worth another solve
-      norm = new_norm;
-    }
-  }
   for (int k = 0; k < num_kkt; ++k) sol[perm[k]] = perm_sol[k];
+  if (max_refinement_steps > 0) RefineKkt(rhs, sol, options, max_refinement_steps);
+}
+
+void Solver::Workspace::RefineKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
+                                  int max_refinement_steps) {
+  for (int k = 0; k < num_kkt; ++k) {
+    perm_rhs[k] = rhs[perm[k]];
+    perm_sol[k] = sol[perm[k]];
+  }
+  const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
+  KktMultiplyUnregularized(perm_sol.data(), perm_res.data());
+  perm_res = perm_rhs - perm_res;
+  double norm = NormInf(perm_res.data(), num_kkt);
+  bool changed = false;
+  for (int step = 0; step < max_refinement_steps && norm > bound; ++step) {
+    // Candidate x + K~^{-1} r, accepted only if it reduces the residual of the exact system.
+    perm_corr = perm_res;
+    ldl.Solve(perm_corr.data());
+    perm_corr += perm_sol;
+    KktMultiplyUnregularized(perm_corr.data(), perm_res.data());
+    perm_res = perm_rhs - perm_res;
+    const double new_norm = NormInf(perm_res.data(), num_kkt);
+    ++refinement_counter;
+    if (!(new_norm < norm)) break;  // no progress (or NaN): keep the previous solution
+    perm_sol.swap(perm_corr);
+    changed = true;
+    if (new_norm > options.refinement_stagnation * norm) break;  // slow: not worth another solve
+    norm = new_norm;
+  }
+  if (changed) {
+    for (int k = 0; k < num_kkt; ++k) sol[perm[k]] = perm_sol[k];
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1004,7 +1041,8 @@ Result Solver::Solve(const Problem& problem) {
     W.rhs1.head(n) = -W.c;
     W.rhs1.segment(n, p) = W.b;
     W.rhs1.segment(n + p, m) = W.h;
-    W.SolveKkt(W.rhs1, W.sol1, options_, options_.max_refinement_steps);
+    // Unrefined: only the combined direction below is refined (one refined solve per iteration).
+    W.SolveKkt(W.rhs1, W.sol1, options_, 0);
     const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
                          W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
 
@@ -1018,14 +1056,25 @@ Result Solver::Solve(const Problem& problem) {
       W.rhs2.segment(n, p) = -eta_r * W.ry;
       W.rhs2.segment(n + p, m) = -eta_r * W.rz + W.dtmp2;
       if (N > n + p + m) W.rhs2.tail(N - n - p - m).setZero();
-      W.SolveKkt(W.rhs2, W.sol2, options_, refinement_steps);
+      W.SolveKkt(W.rhs2, W.sol2, options_, 0);
       const double numer = -eta_r * rtau + d_kappa / tau -
                            (W.c.dot(W.sol2.head(n)) + W.b.dot(W.sol2.segment(n, p)) +
                             W.h.dot(W.sol2.segment(n + p, m)));
       dtau = numer / denom;
-      W.dx = W.sol2.head(n) + dtau * W.sol1.head(n);
-      W.dy = W.sol2.segment(n, p) + dtau * W.sol1.segment(n, p);
-      W.dz = W.sol2.segment(n + p, m) + dtau * W.sol1.segment(n + p, m);
+      if (refinement_steps > 0) {
+        // Refine the combined direction K (sol2 + dtau sol1) = rhs2 + dtau rhs1 once, instead of
+        // refining sol1 and sol2 separately (a solve and two products less per iteration).
+        W.sol2 += dtau * W.sol1;
+        W.rhs2 += dtau * W.rhs1;
+        W.RefineKkt(W.rhs2, W.sol2, options_, refinement_steps);
+        W.dx = W.sol2.head(n);
+        W.dy = W.sol2.segment(n, p);
+        W.dz = W.sol2.segment(n + p, m);
+      } else {
+        W.dx = W.sol2.head(n) + dtau * W.sol1.head(n);
+        W.dy = W.sol2.segment(n, p) + dtau * W.sol1.segment(n, p);
+        W.dz = W.sol2.segment(n + p, m) + dtau * W.sol1.segment(n + p, m);
+      }
       // ds = -W (lambda \ d_s) - W'W dz.
       W.ApplyW(W.dz.data(), W.dtmp1.data());
       W.ApplyW(W.dtmp1.data(), W.dtmp3.data());
