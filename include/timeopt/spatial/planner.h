@@ -60,7 +60,8 @@ struct PlannerOptions {
   int max_attempts = 4;
   double retry_collision_weight_factor = 4.0;
 
-  // Temporal stage.
+  // Temporal stage. Limits default to TemporalLimits' (2 m/s, 1 m/s^2 per axis); `timeopt plan`
+  // and the forest evaluation use 2 m/s and 2 m/s^2.
   TemporalLimits limits;
   // Cells per piece, K. 20: below the paper's 30-50, but the certified rows make the limits hold
   // between grid points anyway (only optimality is lost, a few per cent of T at most), and the
