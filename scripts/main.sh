@@ -1,12 +1,18 @@
 #!/usr/bin/env bash
 # Installs missing Debian packages, builds timeopt in build/ and runs the main job on the shipped
-# default: a minimum-jerk curve through examples/waypoints.csv, timed optimally by the SOCP,
-# written as samples and a plot of speed, velocity and acceleration against time.
+# defaults:
+#  1. `timeopt plan` with no arguments: plans on maps/forest_20x20.bt (A* front end, Ceres spatial
+#     optimization, certified minimum-time temporal stage) and writes results/plan.csv (100 Hz) and
+#     results/plan.png (the trajectory over a map slice, coloured by speed);
+#  2. a minimum-jerk curve through examples/waypoints.csv timed by the SOCP, with the speed,
+#     velocity and acceleration plot against time (results/waypoints/profile.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j2 --target timeopt_cli
+mkdir -p results
+./build/timeopt plan
 ./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 \
-  --max-acceleration 2 -K 50 --constraint-mode certified --out-dir results
-echo "results: $(pwd)/results"
+  --max-acceleration 2 -K 50 --constraint-mode certified --out-dir results/waypoints
+echo "results: $(pwd)/results (plan.csv, plan.png, waypoints/)"
