@@ -213,7 +213,7 @@ struct Solver::Workspace {
   Eigen::VectorXd lambda;                  // scaled point W z
   Eigen::VectorXd rhs1, sol1, rhs2, sol2;  // unpermuted KKT vectors of size num_kkt
   Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
-  Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, d_s;
+  Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, d_s, ldiv;
   Eigen::VectorXd best_x, best_y, best_z, best_s;
   double best_tau = 1.0, best_kappa = 1.0;
 
@@ -240,6 +240,9 @@ struct Solver::Workspace {
   // Solves K sol = rhs (unpermuted vectors) with iterative refinement on the unregularized matrix.
   void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                 int max_refinement_steps);
+  // Two unrefined solves in one sweep over the factor.
+  void SolveKkt2(const Eigen::VectorXd& rhs_a, Eigen::VectorXd& sol_a, const Eigen::VectorXd& rhs_b,
+                 Eigen::VectorXd& sol_b);
   // Iterative refinement of sol (an approximate solution of K sol = rhs, unpermuted) on the
   // unregularized matrix.
   void RefineKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
@@ -487,7 +490,7 @@ void Solver::Workspace::Analyze(const Problem& problem, int min_dim) {
   for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
   for (Eigen::VectorXd* v : {&y, &ry, &Ax, &dy, &best_y}) v->setZero(p);
   for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &w_orthant, &wbar, &lambda, &dz, &ds, &ds_aff, &dz_aff,
-                             &dtmp1, &dtmp2, &dtmp3, &d_s, &best_z, &best_s}) {
+                             &dtmp1, &dtmp2, &dtmp3, &d_s, &ldiv, &best_z, &best_s}) {
     v->setZero(m);
   }
   for (Eigen::VectorXd* v : {&rhs1, &sol1, &rhs2, &sol2, &perm_rhs, &perm_sol, &perm_res, &perm_corr}) {
@@ -781,6 +784,19 @@ void Solver::Workspace::SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& so
   if (max_refinement_steps > 0) RefineKkt(rhs, sol, options, max_refinement_steps);
 }
 
+void Solver::Workspace::SolveKkt2(const Eigen::VectorXd& rhs_a, Eigen::VectorXd& sol_a,
+                                  const Eigen::VectorXd& rhs_b, Eigen::VectorXd& sol_b) {
+  for (int k = 0; k < num_kkt; ++k) {
+    perm_sol[k] = rhs_a[perm[k]];
+    perm_corr[k] = rhs_b[perm[k]];
+  }
+  ldl.Solve2(perm_sol.data(), perm_corr.data());
+  for (int k = 0; k < num_kkt; ++k) {
+    sol_a[perm[k]] = perm_sol[k];
+    sol_b[perm[k]] = perm_corr[k];
+  }
+}
+
 void Solver::Workspace::RefineKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                                   int max_refinement_steps) {
   for (int k = 0; k < num_kkt; ++k) {
@@ -1037,26 +1053,35 @@ Result Solver::Solve(const Problem& problem) {
     dynamic_regs += W.Factor(options_);
     const int refinements_before = W.refinement_counter;
 
-    // sol1 = K^{-1} [-c; b; h].
+    // sol1 = K^{-1} [-c; b; h] (unrefined: only the combined direction below is refined, one refined
+    // solve per iteration), solved in one sweep with the affine direction's right-hand side.
     W.rhs1.head(n) = -W.c;
     W.rhs1.segment(n, p) = W.b;
     W.rhs1.segment(n + p, m) = W.h;
-    // Unrefined: only the combined direction below is refined (one refined solve per iteration).
-    W.SolveKkt(W.rhs1, W.sol1, options_, 0);
-    const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
-                         W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
 
-    // One Newton direction for the residual weight `eta_r`, complementarity right-hand side W.d_s
-    // (cones) and d_kappa. Fills dx, dy, dz, ds and returns (dtau, dkappa).
-    auto direction = [&](double eta_r, double d_kappa, int refinement_steps, double& dtau, double& dkappa) {
-      // dtmp1 = lambda \ d_s, dtmp2 = W dtmp1.
-      W.JordanDivide(W.lambda.data(), W.d_s.data(), W.dtmp1.data());
-      W.ApplyW(W.dtmp1.data(), W.dtmp2.data());
+    // Right-hand side of a Newton direction for the residual weight `eta_r` and complementarity
+    // right-hand side W.d_s (cones): rhs2, with ldiv = lambda \ d_s and dtmp2 = W ldiv.
+    auto direction_rhs = [&](double eta_r) {
+      W.JordanDivide(W.lambda.data(), W.d_s.data(), W.ldiv.data());
+      W.ApplyW(W.ldiv.data(), W.dtmp2.data());
       W.rhs2.head(n) = -eta_r * W.rx;
       W.rhs2.segment(n, p) = -eta_r * W.ry;
       W.rhs2.segment(n + p, m) = -eta_r * W.rz + W.dtmp2;
       if (N > n + p + m) W.rhs2.tail(N - n - p - m).setZero();
-      W.SolveKkt(W.rhs2, W.sol2, options_, 0);
+    };
+    // The predictor's right-hand side: d_s = lambda o lambda.
+    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
+    direction_rhs(1.0);
+    W.SolveKkt2(W.rhs1, W.sol1, W.rhs2, W.sol2);
+    const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
+                         W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
+
+    // Completes the Newton direction whose rhs2 is set and (if `solved`) solved into sol2. Fills dx,
+    // dy, dz, ds, and W^{-1} ds, W dz (in ds_aff, dz_aff, for the step length and the corrector);
+    // returns (dtau, dkappa).
+    auto direction = [&](double eta_r, double d_kappa, int refinement_steps, bool solved, double& dtau,
+                         double& dkappa) {
+      if (!solved) W.SolveKkt(W.rhs2, W.sol2, options_, 0);
       const double numer = -eta_r * rtau + d_kappa / tau -
                            (W.c.dot(W.sol2.head(n)) + W.b.dot(W.sol2.segment(n, p)) +
                             W.h.dot(W.sol2.segment(n + p, m)));
@@ -1075,19 +1100,18 @@ Result Solver::Solve(const Problem& problem) {
         W.dy = W.sol2.segment(n, p) + dtau * W.sol1.segment(n, p);
         W.dz = W.sol2.segment(n + p, m) + dtau * W.sol1.segment(n + p, m);
       }
-      // ds = -W (lambda \ d_s) - W'W dz.
-      W.ApplyW(W.dz.data(), W.dtmp1.data());
-      W.ApplyW(W.dtmp1.data(), W.dtmp3.data());
+      // ds = -W (lambda \ d_s) - W'W dz, so W^{-1} ds = -(lambda \ d_s) - W dz.
+      W.ApplyW(W.dz.data(), W.dz_aff.data());
+      W.ApplyW(W.dz_aff.data(), W.dtmp3.data());
       W.ds = -W.dtmp2 - W.dtmp3;
+      W.ds_aff = -W.ldiv - W.dz_aff;
       dkappa = -(d_kappa + kappa * dtau) / tau;
     };
     // Step to the boundary, computed in the scaled space: s + a ds in K iff lambda + a W^{-1} ds in K,
     // and z + a dz in K iff lambda + a W dz in K (W maps K onto K). lambda is well centered, so the
     // root of the cone's quadratic is well conditioned there, unlike at s or z themselves.
-    // Leaves W^{-1} ds in ds_aff and W dz in dz_aff.
+    // Uses W^{-1} ds in ds_aff and W dz in dz_aff (set by direction).
     auto max_step = [&](double dtau, double dkappa) {
-      W.ApplyWinv(W.ds.data(), W.ds_aff.data());
-      W.ApplyW(W.dz.data(), W.dz_aff.data());
       double alpha = std::min(W.MaxStep(W.lambda.data(), W.ds_aff.data()),
                               W.MaxStep(W.lambda.data(), W.dz_aff.data()));
       if (dtau < 0.0) alpha = std::min(alpha, -tau / dtau);
@@ -1096,21 +1120,21 @@ Result Solver::Solve(const Problem& problem) {
     };
 
     // ---- predictor (affine scaling) ----
-    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
     double dtau_a = 0.0, dkappa_a = 0.0;
-    direction(1.0, tau * kappa, options_.max_affine_refinement_steps, dtau_a, dkappa_a);
+    direction(1.0, tau * kappa, options_.max_affine_refinement_steps, true, dtau_a, dkappa_a);
     const double alpha_a = std::min(1.0, max_step(dtau_a, dkappa_a));
     sigma = std::pow(1.0 - alpha_a, 3);
     sigma = std::min(1.0, std::max(0.0, sigma));
 
     // ---- corrector: d_s = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e ----
-    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());  // set by max_step
+    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());  // set by direction
     W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
     W.d_s += W.dtmp1;
     W.AddIdentity(W.d_s.data(), -sigma * mu);
     const double d_kappa = tau * kappa + dtau_a * dkappa_a - sigma * mu;
     double dtau = 0.0, dkappa = 0.0;
-    direction(1.0 - sigma, d_kappa, options_.max_refinement_steps, dtau, dkappa);
+    direction_rhs(1.0 - sigma);
+    direction(1.0 - sigma, d_kappa, options_.max_refinement_steps, false, dtau, dkappa);
     step = std::min(1.0, options_.step_fraction * max_step(dtau, dkappa));
     iteration_refinements = W.refinement_counter - refinements_before;
 

@@ -129,4 +129,31 @@ void SparseLdl::Solve(double* x) const {
   }
 }
 
+void SparseLdl::Solve2(double* x1, double* x2) const {
+  const double* lx = l_val_.data();
+  const int* li = l_row_.data();
+  const double* rv = l_row_val_.data();
+  const int* rc = row_col_.data();
+  for (int k = 0; k < n_; ++k) {
+    double sum1 = x1[k], sum2 = x2[k];
+    for (int q = row_ptr_[k]; q < row_ptr_[k + 1]; ++q) {
+      const int c = rc[q];
+      sum1 -= rv[q] * x1[c];
+      sum2 -= rv[q] * x2[c];
+    }
+    x1[k] = sum1;
+    x2[k] = sum2;
+  }
+  for (int i = n_ - 1; i >= 0; --i) {
+    double xi1 = x1[i] * inv_d_[i], xi2 = x2[i] * inv_d_[i];
+    for (int p = l_col_ptr_[i]; p < l_col_ptr_[i + 1]; ++p) {
+      const int r = li[p];
+      xi1 -= lx[p] * x1[r];
+      xi2 -= lx[p] * x2[r];
+    }
+    x1[i] = xi1;
+    x2[i] = xi2;
+  }
+}
+
 }  // namespace timeopt::conic

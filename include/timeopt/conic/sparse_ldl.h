@@ -27,6 +27,8 @@ class SparseLdl {
 
   /// Solves L D L' x = rhs in place (x holds rhs on entry).
   void Solve(double* x) const;
+  /// Solves two systems in one sweep over the factor (x1, x2 hold the right-hand sides on entry).
+  void Solve2(double* x1, double* x2) const;
 
   int size() const { return n_; }
   /// Pivots (in elimination order) replaced by the last Factor(): the first num_regularized() entries.
