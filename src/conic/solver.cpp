@@ -131,6 +131,38 @@ inline void ApplyWCone(const double* w, double eta, const double* v, double* o, 
   for (int i = 1; i < d; ++i) o[i] = eta * (v[i] + coef * w[i]);
 }
 
+// Nesterov-Todd scaling point wbar (w0^2 - ||w1||^2 = 1) and factor eta of one cone; false if s or z
+// is not strictly inside.
+template <int D>
+inline bool NtScalingCone(const double* sv, const double* zv, double* w, double& eta, int dim) {
+  const int d = D > 0 ? D : dim;
+  double s1 = 0.0, z1 = 0.0, sz = 0.0;
+  for (int i = 1; i < d; ++i) {
+    s1 += sv[i] * sv[i];
+    z1 += zv[i] * zv[i];
+    sz += sv[i] * zv[i];
+  }
+  s1 = std::sqrt(s1);
+  z1 = std::sqrt(z1);
+  const double sres = (sv[0] - s1) * (sv[0] + s1);
+  const double zres = (zv[0] - z1) * (zv[0] + z1);
+  if (!(sv[0] - s1 > 0.0 && zv[0] - z1 > 0.0 && sres > 0.0 && zres > 0.0)) return false;
+  const double sn = std::sqrt(sres), zn = std::sqrt(zres);
+  const double dot = (sv[0] * zv[0] + sz) / (sn * zn);  // sbar'zbar >= 1
+  const double gamma = std::sqrt(0.5 * (1.0 + dot));
+  const double f = 0.5 / gamma;
+  w[0] = f * (sv[0] / sn + zv[0] / zn);
+  double w1 = 0.0;
+  for (int i = 1; i < d; ++i) {
+    w[i] = f * (sv[i] / sn - zv[i] / zn);
+    w1 += w[i] * w[i];
+  }
+  // Restore w0^2 - ||w1||^2 = 1 against rounding.
+  w[0] = std::sqrt(1.0 + w1);
+  eta = std::sqrt(sn / zn);
+  return true;
+}
+
 // Largest step a with u + a d in the cone (u strictly inside): infinity if unbounded, 0 if u is not
 // strictly inside.
 template <int D>
@@ -559,31 +591,9 @@ bool Solver::Workspace::ComputeScaling() {
     const double* sv = s.data() + blk.start;
     const double* zv = z.data() + blk.start;
     double* w = wbar.data() + blk.start;
-    const int d = blk.dim;
-    double s1 = 0.0, z1 = 0.0, sz = 0.0;
-    for (int i = 1; i < d; ++i) {
-      s1 += sv[i] * sv[i];
-      z1 += zv[i] * zv[i];
-      sz += sv[i] * zv[i];
-    }
-    s1 = std::sqrt(s1);
-    z1 = std::sqrt(z1);
-    const double sres = (sv[0] - s1) * (sv[0] + s1);
-    const double zres = (zv[0] - z1) * (zv[0] + z1);
-    if (!(sv[0] - s1 > 0.0 && zv[0] - z1 > 0.0 && sres > 0.0 && zres > 0.0)) return false;
-    const double sn = std::sqrt(sres), zn = std::sqrt(zres);
-    const double dot = (sv[0] * zv[0] + sz) / (sn * zn);  // sbar'zbar >= 1
-    const double gamma = std::sqrt(0.5 * (1.0 + dot));
-    const double f = 0.5 / gamma;
-    w[0] = f * (sv[0] / sn + zv[0] / zn);
-    double w1 = 0.0;
-    for (int i = 1; i < d; ++i) {
-      w[i] = f * (sv[i] / sn - zv[i] / zn);
-      w1 += w[i] * w[i];
-    }
-    // Restore w0^2 - ||w1||^2 = 1 against rounding.
-    w[0] = std::sqrt(1.0 + w1);
-    eta[k] = std::sqrt(sn / zn);
+    const bool ok = blk.dim == 3 ? NtScalingCone<3>(sv, zv, w, eta[k], 3)
+                                 : NtScalingCone<0>(sv, zv, w, eta[k], blk.dim);
+    if (!ok) return false;
   }
   // lambda = W z for the cones.
   for (std::size_t k = 0; k < socs.size(); ++k) {

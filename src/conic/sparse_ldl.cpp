@@ -80,6 +80,7 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
   double* work = work_.data();
   double* lx = l_val_.data();
   const int* li = l_row_.data();
+  double* rv = l_row_val_.data();  // L in row order (row_col_), written as it is computed
   for (int k = 0; k < n_; ++k) {
     const int a_end = a_col_ptr_[k + 1];
     for (int p = a_col_ptr_[k]; p < a_end; ++p) work[a_row_[p]] = values[p];
@@ -94,6 +95,7 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
       for (int p = l_col_ptr_[i]; p < slot; ++p) work[li[p]] -= lx[p] * yi;
       const double lki = yi / d_[i];
       lx[slot] = lki;
+      rv[q] = lki;  // row-wise copy for the forward solve
       d -= lki * yi;
     }
     if (!(signs[k] * d > threshold)) {  // also catches NaN
@@ -103,9 +105,6 @@ int SparseLdl::Factor(const double* values, const signed char* signs, double thr
     d_[k] = d;
     inv_d_[k] = 1.0 / d;
   }
-  // Row-wise copy of L for the forward solve (a gather per row instead of a scatter per column).
-  const int nnz = static_cast<int>(row_slot_.size());
-  for (int q = 0; q < nnz; ++q) l_row_val_[q] = lx[row_slot_[q]];
   num_regularized_ = regularized;
   return regularized;
 }
