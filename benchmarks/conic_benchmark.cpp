@@ -12,36 +12,55 @@
 // median_cpu_ms (median CPU time of the solving thread), cpu_ms_per_ipm_iteration, analyze_ms (first
 // solve, including ordering and symbolic analysis), kkt (KKT dimension), nnz_l (non-zeros of L),
 // n (variables), p (equalities), m (cone rows).
-// Run: build-conic/conic_benchmark --benchmark_counters_tabular=true [--benchmark_filter=Temporal]
+// Run: build-conic2/conic_benchmark --benchmark_counters_tabular=true
+//      (build: cmake -S . -B build-conic2 -DCMAKE_BUILD_TYPE=Release && cmake --build build-conic2 -j1
+//       --target conic_benchmark)
 //
-// Measured 2026-11-22 (commit after ef11781, Release, 2-core 2.6 GHz VM shared with other jobs,
-// single thread; CPU-time medians of the solving thread):
+// Measured 2026-11-22 04:07 UTC, commit 9c52285 (Release -O3, 2-core 2.6 GHz EPYC VM shared with
+// another build, single thread; CPU-time medians of the solving thread; N >= 12,500: one timed solve):
 //
 //   temporal  N cells   n vars  KKT rows  nnz(L)   IPM its  ms/its   median ms  accuracy
-//              250       1,003     5,261    14,249     20     0.35        7.1    full
-//              500       2,003    10,511    28,499     20     0.89       17.8    full  (m=10, K=50)
-//            1,250       5,003    26,261    71,249     22     1.99       43.9    reduced
-//            2,500      10,003    52,511   146,270     31     4.68      145      reduced
-//            6,250      25,003   131,261   365,645     30    14.0       420      reduced
-//           12,500      50,003   262,511   731,270     32    30.4       974      reduced
-//           25,000     100,003   525,011 1,462,520     37    74.1      2740      reduced
-//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.29
+//              250       1,003     5,261    14,249     20     0.28        5.5    full
+//              500       2,003    10,511    28,499     20     0.55       11.0    full  (m=10, K=50)
+//            1,250       5,003    26,261    71,249     23     1.53       35.1    full
+//            2,500      10,003    52,511   146,270     30     3.72      112      reduced
+//            6,250      25,003   131,261   365,645     35    15.1       530      reduced
+//           12,500      50,003   262,511   731,270     46    25.1      1153      reduced
+//           25,000     100,003   525,011 1,462,520     35    51.4      1800      reduced
+//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.35 (per iteration: 1.14;
+//   the rest is the iteration count, which grows where accuracy stalls)
 //
 //   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy
-//            1,000      3,750     30,524    12     0.75       9.0    full
-//            3,000     11,250     92,813    16     3.0       48.1    full
-//           10,000     37,500    320,225    17    14.8      252      reduced
-//           30,000    112,500    982,367    24    56.6     1359      full
-//          100,000    375,000  3,459,990    34   155       5263      reduced
-//   log-log slope: 1.40
+//            1,000      3,750     30,524    12     0.66       7.9    full
+//            3,000     11,250     92,813    16     2.35      37.6    full
+//           10,000     37,500    320,225    18     9.08     164      reduced
+//           30,000    112,500    982,367    24    29.2      700      full
+//          100,000    375,000  3,459,990    35   100       3518      full
+//   log-log slope: 1.31
+//
+// Before (commit 7ef16ad's table, same machine, quieter): temporal 0.35 / 0.89 / 1.99 / 4.68 ms per
+// iteration and 7.1 / 17.8 / 43.9 / 145 ms total at N = 250 / 500 / 1,250 / 2,500. A same-moment A/B
+// of the two versions (a driver timing Solve() on TemporalProblem, 11 solves, median CPU ms) gave
+// 6.8 -> 5.2..6.7 (N=250), 13.6 -> 10.8 (500), 46.5 -> 35.8 (1,250, now full accuracy),
+// 162 -> 125 (2,500), 687 -> 468 (6,250).
 //
 // "reduced": kOptimal with Result::reduced_accuracy (relative gap ~1e-8..3e-7 instead of 1e-8).
 // The targets (about 5,000 variables: <= 25 iterations and <= 2 ms; slope <= 1.1) are NOT
-// met: at N = 1,250 (5,003 variables) 22 iterations take 44 ms. The factor L is about as large as
-// the KKT matrix (fill is linear), but each iteration costs one factorization, about five triangular
-// solves and four KKT products (refinement), each a pass over ~1e5 indirectly addressed entries;
-// time per iteration grows faster than n beyond the caches, and the iteration count grows when
-// accuracy stalls.
+// met: at N = 1,250 (5,003 variables) 23 iterations take 35 ms.
+//
+// Where the time goes (perf record on N = 500 and 1,250, after the changes): numeric factorization
+// 16%, triangular solves 20% (one two-right-hand-side sweep, one single solve and ~1.5 refinement
+// solves per iteration), KKT products for refinement 10%, step lengths 8%, NT scaling 5%, W products
+// and Jordan operations 8%, vector updates in Solve() 8-14%. Hot-loop timings at N = 500 (10,511 rows,
+// nnz(L) 28,499, 85,719 multiply-adds): factorization 90 us, solve 35 us, KKT product 22 us; all
+// three cost ~1.2 ns per stored entry and grow linearly (N = 2,500: 480 / 180 / 122 us). Nothing
+// unexpected dominates; the cost is the number of passes over ~1e5 indirectly addressed entries.
+// Measured and rejected: reverse Cuthill-McKee (nnz(L) 75,809 vs 28,499 for AMD at N = 500; AMD
+// eliminates the cone rows as leaves with almost no fill); eliminating the orthant rows in closed
+// form before factorizing (nnz(L) 18k instead of 28.5k but the extra passes cost as much as they
+// save); a column-oriented forward solve without the row-wise copy of L (slower: scatter instead of
+// gather); the scaled KKT form W^{-1}G / -I for the 3x3 cone blocks (no dynamic regularizations
+// left, but the stall near the optimum remains and refinement costs more).
 
 #include <time.h>
 
