@@ -10,6 +10,8 @@
 #include <sstream>
 #include <utility>
 
+#include "option_check.h"
+
 namespace timeopt {
 namespace {
 
@@ -60,13 +62,8 @@ const char* ToString(PathSearchStatus status) {
 }
 
 bool PathSearchOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& field, const std::string& expected, double got) {
-    if (error != nullptr) {
-      std::ostringstream s;
-      s << field << ": expected " << expected << ", got " << got;
-      *error = s.str();
-    }
-    return false;
+  const auto fail = [error](const std::string& field, const std::string& expected, double got) {
+    return internal::FailOption(error, field, expected, got);
   };
   if (!std::isfinite(robot_radius) || robot_radius < 0.0) {
     return fail("robot_radius", "a finite number >= 0 (metres)", robot_radius);

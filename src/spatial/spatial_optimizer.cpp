@@ -7,6 +7,7 @@
 
 #include <ceres/ceres.h>
 
+#include "option_check.h"
 #include "spatial_costs.h"
 
 namespace timeopt {
@@ -64,13 +65,8 @@ const char* ToString(SpatialStatus status) {
 }
 
 bool SpatialOptimizerOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& field, const std::string& expected, double got) {
-    if (error != nullptr) {
-      std::ostringstream s;
-      s << field << ": expected " << expected << ", got " << got;
-      *error = s.str();
-    }
-    return false;
+  const auto fail = [error](const std::string& field, const std::string& expected, double got) {
+    return internal::FailOption(error, field, expected, got);
   };
   if (!NonNegative(smoothness_weight)) return fail("smoothness_weight", "a finite number >= 0", smoothness_weight);
   if (!NonNegative(collision_weight)) return fail("collision_weight", "a finite number >= 0", collision_weight);

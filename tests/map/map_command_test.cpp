@@ -11,6 +11,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "../common/run_cli.h"
+
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/map_generators.h"
 #include "timeopt/map/occupancy_map.h"
@@ -20,22 +22,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct CliRun {
-  int exit_code;
-  std::string output;  // stdout and stderr together
-};
-
-CliRun RunCli(const std::string& args) {
-  const std::string command = std::string(TIMEOPT_CLI_PATH) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return {-1, "popen failed"};
-  std::string output;
-  std::array<char, 4096> buffer{};
-  size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+using testing_support::CliRun;
+using testing_support::RunCli;
 
 class MapCommandTest : public ::testing::Test {
  protected:

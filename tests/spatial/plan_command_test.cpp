@@ -12,29 +12,26 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "../common/run_cli.h"
+
 #include "timeopt/map/map_generators.h"
 #include "timeopt/map/occupancy_map.h"
 
 namespace timeopt {
 namespace {
 
-struct CliRun {
+struct PlanRun {
   int exit_code = -1;
   std::string out;  // stdout only
   std::string err;  // stderr only
 };
 
-CliRun RunPlan(const std::string& args, const std::string& dir) {
+PlanRun RunPlan(const std::string& args, const std::string& dir) {
   const std::string err_file = dir + "/stderr.txt";
-  const std::string command = std::string(TIMEOPT_CLI_PATH) + " plan " + args + " 2>" + err_file;
-  CliRun run;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return run;
-  char buffer[4096];
-  size_t n;
-  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) run.out.append(buffer, n);
-  const int status = pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const testing_support::CliRun cli = testing_support::RunCli("plan " + args, "2>" + err_file);
+  PlanRun run;
+  run.exit_code = cli.exit_code;
+  run.out = cli.output;
   std::ifstream in(err_file);
   std::stringstream s;
   s << in.rdbuf();
@@ -79,7 +76,7 @@ std::string PlanCommand::dir_;
 
 TEST_F(PlanCommand, PlansAndWritesTheSamplesAndTheSummary) {
   const std::string csv = dir_ + "/plan.csv", png = dir_ + "/plan.png";
-  const CliRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --output " +
+  const PlanRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --output " +
                                  csv + " --plot " + png,
                              dir_);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
@@ -124,7 +121,7 @@ TEST_F(PlanCommand, BadInputExitsWithTwoAndAOneLineMessage) {
       {"--map " + map() + " --goal 7.4,7.4,1.5", "--start and --goal are required"},
   };
   for (const Case& c : cases) {
-    const CliRun run = RunPlan(c.args, dir_);
+    const PlanRun run = RunPlan(c.args, dir_);
     EXPECT_EQ(run.exit_code, 2) << c.args << "\n" << run.out << run.err;
     EXPECT_NE((run.out + run.err).find(c.expected), std::string::npos) << c.args << "\n" << run.err;
     EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
@@ -132,7 +129,7 @@ TEST_F(PlanCommand, BadInputExitsWithTwoAndAOneLineMessage) {
 }
 
 TEST_F(PlanCommand, EnclosedGoalIsUnreachableWithExitThree) {
-  const CliRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 6,6,1.5", dir_);
+  const PlanRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 6,6,1.5", dir_);
   EXPECT_EQ(run.exit_code, 3) << run.out << run.err;
   EXPECT_EQ(nlohmann::json::parse(run.out)["status"], "unreachable");
 }
