@@ -255,6 +255,8 @@ void RunSolves(benchmark::State& state, const Problem& problem, const char* fami
   // the other processes.
   Medians(family)[problem.num_variables()] = median_cpu;
   state.counters["ipm_iterations"] = result.iterations;
+  state.counters["refinements"] = result.num_refinement_steps;
+  state.counters["reduced_kkt"] = result.kkt_method == timeopt::conic::KktMethod::kReducedBanded ? 1 : 0;
   state.counters["reduced_accuracy"] = result.reduced_accuracy ? 1 : 0;
   state.counters["median_ms"] = median;
   state.counters["median_cpu_ms"] = median_cpu;

@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
   csv << "# vmax 3,3,2 m/s, amax 2,2,1.5 m/s^2, rho 0, rest to rest, SOCP backend, median of "
       << repetitions << " solves\n"
       << "curve,kind,K,T_paper,T_certified,increase_percent,paper_ms,certified_ms,time_ratio,"
-         "paper_max_acc_ratio,certified_max_acc_ratio,certified_max_vel_ratio\n";
+         "paper_max_acc_ratio,certified_max_acc_ratio,certified_max_vel_ratio,paper_iterations,"
+         "certified_iterations\n";
   csv.precision(10);
   const auto solver = MakeSocpTemporalSolver();
   for (int K : {30, 50}) {
@@ -83,7 +84,7 @@ int main(int argc, char** argv) {
       csv << c << "," << (quintic ? "quintic" : "cubic") << "," << K << "," << r[0].total_time << ","
           << r[1].total_time << "," << inc << "," << ms[0] << "," << ms[1] << "," << ms[1] / ms[0]
           << "," << r[0].max_acceleration_ratio << "," << r[1].max_acceleration_ratio << ","
-          << r[1].max_velocity_ratio << "\n";
+          << r[1].max_velocity_ratio << "," << r[0].iterations << "," << r[1].iterations << "\n";
     }
     std::cout << "K=" << K << " (" << increases.size() << " curves): T increase median "
               << Median(increases) << "% max " << *std::max_element(increases.begin(), increases.end())

@@ -76,6 +76,26 @@ enum class Status {
 /// Short lowercase name of a status, e.g. "optimal", "primal_infeasible".
 const char* ToString(Status status);
 
+/// How the Newton (KKT) system of every iteration is solved.
+enum class KktMethod {
+  /// kReducedBanded when it is safe and pays off: G has at least as many rows as columns and no empty
+  /// column (else G' W^{-2} G is singular), at most 8 cones are expanded, and the reduced system is
+  /// narrow (its variable-band profile, after a reverse Cuthill-McKee ordering, stores at most 16
+  /// entries per row on average, border rows excluded). Otherwise kAugmentedSparse.
+  kAutomatic,
+  /// The full quasi-definite system in (x, y, z), AMD-ordered, sparse LDL'. Works for every sparsity.
+  kAugmentedSparse,
+  /// z eliminated through the cone scaling: the system in (x, y) with G' W^{-2} G, ordered to a small
+  /// bandwidth (reverse Cuthill-McKee) and factorized by a skyline LDL' on contiguous memory; large
+  /// cones enter as two border rows each. Faster on path-like problems (trajectory time allocation);
+  /// iterative refinement still runs on the full unreduced system. Defined only when G has at least
+  /// as many rows as columns and no empty column; otherwise kAugmentedSparse is used (see
+  /// Result::kkt_method).
+  kReducedBanded,
+};
+
+const char* ToString(KktMethod method);
+
 /// Progress of one interior-point iteration, given to Options::callback.
 struct IterationInfo {
   int iteration = 0;               ///< 0 for the initial point, then 1, 2, ...
@@ -115,9 +135,13 @@ struct Result {
   /// True if kOptimal was reached only with the reduced tolerances of SolverOptions (the iteration
   /// stalled near the optimum); residuals and gap tell the accuracy actually reached.
   bool reduced_accuracy = false;
-  int kkt_size = 0;                ///< Dimension of the KKT system (n + p + m + 2 per expanded cone).
-  long long kkt_nonzeros = 0;      ///< Stored non-zeros of the KKT upper triangle.
-  long long factor_nonzeros = 0;   ///< Non-zeros of the LDL' factor L (strictly lower part).
+  /// Dimension of the factorized system: n + p + m + 2 per expanded cone (kAugmentedSparse) or
+  /// n + p + 2 per expanded cone (kReducedBanded).
+  int kkt_size = 0;
+  long long kkt_nonzeros = 0;      ///< Stored non-zeros of the factorized matrix's upper triangle.
+  /// Non-zeros of the LDL' factor L (strictly lower part; for kReducedBanded its stored profile).
+  long long factor_nonzeros = 0;
+  KktMethod kkt_method = KktMethod::kAutomatic;  ///< The method used (never kAutomatic after Solve()).
 
   /// True iff status == kOptimal.
   bool is_success() const { return status == Status::kOptimal; }
@@ -180,6 +204,8 @@ struct SolverOptions {
   /// (two extra KKT rows per cone) instead of a dense block. >= 1. 6: below that a dense block
   /// has fewer non-zeros than the expansion.
   int sparse_cone_min_dimension = 6;
+  /// How the KKT system is solved; see KktMethod. kAutomatic.
+  KktMethod kkt_method = KktMethod::kAutomatic;
   /// Called after every iteration (and once for the initial point) if set. The library never prints.
   std::function<void(const IterationInfo&)> callback;
 
@@ -200,7 +226,7 @@ class Solver {
 
   const Options& options() const { return options_; }
   /// Replaces the options (throws std::invalid_argument if !options.IsValid()). A change of
-  /// sparse_cone_min_dimension forces a new symbolic analysis at the next Solve().
+  /// sparse_cone_min_dimension or kkt_method forces a new symbolic analysis at the next Solve().
   void set_options(const Options& options);
 
   /// Solves the problem. Throws std::invalid_argument (before any iteration) if the problem is malformed
