@@ -4,10 +4,11 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 
-#include "timeopt/curve/bernstein.h"
 
 namespace timeopt {
 
@@ -32,40 +33,73 @@ double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+// Small polynomials (ascending coefficients) on the stack: certified mode multiplies at most two
+// derivatives of a piece, so 2 * degree + 2 coefficients suffice (pieces of degree <= 30).
+constexpr int kMaxSmallPoly = 64;
+using SmallPoly = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSmallPoly, 1>;
+
 // Coefficients (ascending, in u in [0, 1]) of p(s0 + h u) for the polynomial with ascending
-// coefficients `c` in s.
-Eigen::VectorXd Shifted(const Eigen::VectorXd& c, double s0, double h) {
+// coefficients `c` in s: a Taylor shift by repeated synthetic division, then the scaling by h^j.
+SmallPoly Shifted(const SmallPoly& c, double s0, double h) {
   const int n = static_cast<int>(c.size());
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
-  // Taylor expansion at s0: out_j = p^(j)(s0) h^j / j!.
-  Eigen::VectorXd d = c;  // coefficients of the current derivative divided by j!
+  SmallPoly out = c;
+  for (int i = 0; i + 1 < n; ++i) {
+    for (int j = n - 2; j >= i; --j) out(j) += s0 * out(j + 1);
+  }
   double hj = 1.0;
   for (int j = 0; j < n; ++j) {
-    double v = 0.0;
-    for (int k = static_cast<int>(d.size()) - 1; k >= 0; --k) v = v * s0 + d(k);
-    out(j) = v * hj;
-    // next: derivative / (j + 1)
-    Eigen::VectorXd next = Eigen::VectorXd::Zero(std::max<Eigen::Index>(1, d.size() - 1));
-    for (int k = 1; k < d.size(); ++k) next(k - 1) = d(k) * k / static_cast<double>(j + 1);
-    d = next;
+    out(j) *= hj;
     hj *= h;
   }
   return out;
 }
 
-Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+SmallPoly Multiply(const SmallPoly& a, const SmallPoly& b) {
+  SmallPoly out = SmallPoly::Zero(a.size() + b.size() - 1);
   for (int i = 0; i < a.size(); ++i) {
     for (int j = 0; j < b.size(); ++j) out(i + j) += a(i) * b(j);
   }
   return out;
 }
 
-Eigen::VectorXd Padded(const Eigen::VectorXd& a, int size) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(std::max<int>(size, static_cast<int>(a.size())));
+SmallPoly Padded(const SmallPoly& a, int size) {
+  SmallPoly out = SmallPoly::Zero(std::max<int>(size, static_cast<int>(a.size())));
   out.head(a.size()) = a;
   return out;
 }
+
+// Power-to-Bernstein conversion matrices by size, computed once per Discretize call:
+// p_k = sum_{j <= k} C(k, j) / C(n, j) a_j.
+class BernsteinTable {
+ public:
+  SmallPoly Convert(const SmallPoly& a) {
+    const int size = static_cast<int>(a.size());
+    if (size >= static_cast<int>(matrices_.size())) matrices_.resize(size + 1);
+    Eigen::MatrixXd& T = matrices_[size];
+    if (T.size() == 0) {
+      T = Eigen::MatrixXd::Zero(size, size);
+      for (int k = 0; k < size; ++k) {
+        for (int j = 0; j <= k; ++j) T(k, j) = BinomialRatio(k, j, size - 1);
+      }
+    }
+    SmallPoly p = SmallPoly::Zero(size);
+    for (int k = 0; k < size; ++k) {
+      double sum = 0.0;
+      for (int j = 0; j <= k; ++j) sum += T(k, j) * a(j);
+      p(k) = sum;
+    }
+    return p;
+  }
+
+ private:
+  // C(k, j) / C(n, j) as a product of ratios (no overflow for large n).
+  static double BinomialRatio(int k, int j, int n) {
+    double r = 1.0;
+    for (int i = 0; i < j; ++i) r *= static_cast<double>(k - i) / static_cast<double>(n - i);
+    return r;
+  }
+  std::vector<Eigen::MatrixXd> matrices_;
+};
 
 class RowBuilder {
  public:
@@ -87,8 +121,10 @@ class RowBuilder {
     terms_.emplace_back(v.var, coef * v.scale);
   }
 
-  // Finishes the row lower <= expression <= upper; `what` names it for presolve messages.
-  void Finish(LinearRow::Kind kind, double lower, double upper, const std::string& what) {
+  // Finishes the row lower <= expression <= upper; what() names it for presolve messages (called
+  // only when a constant row is found infeasible, so that building rows allocates no strings).
+  template <typename What>
+  void Finish(LinearRow::Kind kind, double lower, double upper, const What& what) {
     std::vector<std::pair<int, double>> kept;
     for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
     if (kept.empty()) {
@@ -100,7 +136,7 @@ class RowBuilder {
           (std::isfinite(upper) && constant_ > upper + kConstantRowSlack * scale)) {
         if (!d_.infeasible_reason) {
           std::ostringstream ss;
-          ss << what << " is " << constant_ << ", outside [" << lower << ", " << upper
+          ss << what() << " is " << constant_ << ", outside [" << lower << ", " << upper
              << "] whatever the time allocation";
           d_.infeasible_reason = ss.str();
         }
@@ -342,9 +378,10 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
           } else {
             row.Add(g, t2);
             row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
-                       vmax2(a),
-                       std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
-                           std::to_string(i) + " s=" + std::to_string(k * ds));
+                       vmax2(a), [&] {
+                         return std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
+                                std::to_string(i) + " s=" + std::to_string(k * ds);
+                       });
           }
         }
       }
@@ -371,6 +408,19 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   // upper-right convex hull of the points w can be active (see PruneCellRows); the others are
   // dropped when prune_redundant_rows is set. The feasible set is unchanged.
   std::vector<CellRow> cell_rows;
+  std::vector<PolynomialPiece::Coefficients> first_derivative, second_derivative;
+  BernsteinTable bernstein;
+  if (problem.constraint_mode == ConstraintMode::kCertified) {
+    for (int i = 0; i < m; ++i) {
+      if (curve.piece(i).degree() > 30) {
+        throw std::invalid_argument("curve piece " + std::to_string(i) + " has degree " +
+                                    std::to_string(curve.piece(i).degree()) +
+                                    "; certified mode supports degree <= 30");
+      }
+      first_derivative.push_back(curve.piece(i).Derivative(1).coefficients());
+      second_derivative.push_back(curve.piece(i).Derivative(2).coefficients());
+    }
+  }
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
     const int k = c.first_grid - d.GridIndex(c.piece, 0);
@@ -384,23 +434,23 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         continue;
       }
       // Certified velocity: Bernstein coefficients of f'(s(u))^2 ((1 - u) b0 + u b1).
-      const PolynomialPiece& piece = curve.piece(c.piece);
-      const Eigen::VectorXd q = Shifted(piece.Derivative(1).coefficients().row(a).transpose(), k * ds, ds);
+      const SmallPoly q = Shifted(first_derivative[c.piece].row(a).transpose(), k * ds, ds);
+      const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
       if (q.cwiseAbs().maxCoeff() > 0.0) {
-        const Eigen::VectorXd q2 = Multiply(q, q);
-        const Eigen::VectorXd w0 = PowerToBernstein(Multiply(q2, Eigen::Vector2d(1.0, -1.0)));
-        const Eigen::VectorXd w1 = PowerToBernstein(Multiply(q2, Eigen::Vector2d(0.0, 1.0)));
+        const SmallPoly q2 = Multiply(q, q);
+        const SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
+        const SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
         for (int j = 0; j < w0.size(); ++j) {
           cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / vmax2(a), LinearRow::Kind::kVelocity});
         }
       }
       // Certified acceleration: f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
-      const Eigen::VectorXd p2 = Shifted(piece.Derivative(2).coefficients().row(a).transpose(), k * ds, ds);
-      const Eigen::VectorXd p2a = Multiply(p2, Eigen::Vector2d(1.0, -1.0));
-      const Eigen::VectorXd p2b = Multiply(p2, Eigen::Vector2d(0.0, 1.0));
+      const SmallPoly p2 = Shifted(second_derivative[c.piece].row(a).transpose(), k * ds, ds);
+      const SmallPoly p2a = Multiply(p2, one_minus_u);
+      const SmallPoly p2b = Multiply(p2, u);
       const int size = static_cast<int>(std::max(q.size(), p2a.size()));
-      const Eigen::VectorXd c0 = PowerToBernstein(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
-      const Eigen::VectorXd c1 = PowerToBernstein(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
+      const SmallPoly c0 = bernstein.Convert(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
+      const SmallPoly c1 = bernstein.Convert(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
       for (int j = 0; j < size; ++j) {
         const Eigen::Vector2d w(c0(j) / amax, c1(j) / amax);
         cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
@@ -412,10 +462,10 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       if (r.w(0) <= 0.0 && r.w(1) <= 0.0) continue;  // holds for every b >= 0
       row.Add(c.first_grid, r.w(0));
       row.Add(c.first_grid + 1, r.w(1));
-      row.Finish(r.kind, -std::numeric_limits<double>::infinity(), 1.0,
-                 std::string(r.kind == LinearRow::Kind::kVelocity ? "velocity" : "acceleration") +
-                     " (relative to its limit) in piece " + std::to_string(c.piece) + " cell " +
-                     std::to_string(k));
+      row.Finish(r.kind, -std::numeric_limits<double>::infinity(), 1.0, [&] {
+        return std::string(r.kind == LinearRow::Kind::kVelocity ? "velocity" : "acceleration") +
+               " (relative to its limit) in piece " + std::to_string(c.piece) + " cell " + std::to_string(k);
+      });
     }
   }
 
@@ -429,7 +479,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         row.Add(d.cells[ci].first_grid, -mid_acc[ci](a, 0));
         row.Add(d.cells[ci].first_grid + 1, -mid_acc[ci](a, 1));
         row.Finish(LinearRow::Kind::kAccelerationChange, -lambda, lambda,
-                   std::string("acceleration change on axis ") + kAxisNames[a]);
+                   [&] { return std::string("acceleration change on axis ") + kAxisNames[a]; });
       }
       const size_t last = d.cells.size() - 1;
       const double a0 = problem.boundary.start_acceleration(a);
@@ -437,11 +487,11 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       row.Add(d.cells[0].first_grid, mid_acc[0](a, 0));
       row.Add(d.cells[0].first_grid + 1, mid_acc[0](a, 1));
       row.Finish(LinearRow::Kind::kBoundaryAcceleration, a0 - lambda, a0 + lambda,
-                 std::string("first cell's acceleration on axis ") + kAxisNames[a]);
+                 [&] { return std::string("first cell's acceleration on axis ") + kAxisNames[a]; });
       row.Add(d.cells[last].first_grid, mid_acc[last](a, 0));
       row.Add(d.cells[last].first_grid + 1, mid_acc[last](a, 1));
       row.Finish(LinearRow::Kind::kBoundaryAcceleration, af - lambda, af + lambda,
-                 std::string("last cell's acceleration on axis ") + kAxisNames[a]);
+                 [&] { return std::string("last cell's acceleration on axis ") + kAxisNames[a]; });
     }
   }
   return d;
