@@ -342,8 +342,9 @@ struct Solver::Workspace {
   Eigen::VectorXd lambda;                  // scaled point W z
   Eigen::VectorXd rhs1, sol1, rhs2, sol2;  // unpermuted KKT vectors of size num_kkt
   Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
-  Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, d_s, ldiv;
+  Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, ldiv;
   Eigen::VectorXd best_x, best_y, best_z, best_s;
+  std::vector<double> local_cone;          // scratch of the largest cone (fused passes)
   double best_tau = 1.0, best_kappa = 1.0;
 
   int refinement_counter = 0;
@@ -388,17 +389,23 @@ struct Solver::Workspace {
   // Cone operations on vectors of size m.
   bool ComputeScaling();
   void SetIdentityScaling();
-  void ApplyW(const double* in, double* out) const;
-  void ApplyWinv(const double* in, double* out) const;
   // out = W'W in (Inverse false) or (W'W)^{-1} in (Inverse true).
   template <bool Inverse>
   void ApplyH(const double* in, double* out) const;
-  void JordanProduct(const double* u, const double* v, double* out) const;
-  void JordanDivide(const double* l, const double* v, double* out) const;  // out = l \ v
-  double MaxStep(const double* u, const double* d) const;
   double MinEigenvalue(const double* u) const;  // orthant: u_i, SOC: u0 - ||u1||
   bool StrictlyInterior(const double* u) const;  // the test that ComputeScaling relies on
   void AddIdentity(double* u, double alpha) const;
+
+  // Fused passes of the Newton step (one sweep over the cones each).
+  // The cone part of a direction's right-hand side: with d = lambda o lambda (predictor) or
+  // d = lambda o lambda + ds_aff o dz_aff - sigma_mu e (corrector), sets ldiv = lambda \ d,
+  // dtmp2 = W ldiv and rhs_z = -eta_r rz + dtmp2.
+  void ComplementarityRhs(bool corrector, double sigma_mu, double eta_r, double* rhs_z);
+  // Completes a direction from dz: dz_aff = W dz, ds = -dtmp2 - W dz_aff, ds_aff = -ldiv - dz_aff
+  // (= W^{-1} ds); returns the largest step keeping lambda + a ds_aff and lambda + a dz_aff in K.
+  double CompleteDirection();
+  // dtmp1 = s + step ds and dtmp3 = z + step dz; true if both are strictly inside K.
+  bool TrialPoint(double step);
 
   // Loads the current scaling into the KKT matrix and factorizes it; returns the number of
   // dynamically regularized pivots.
@@ -566,11 +573,16 @@ void Solver::Workspace::Analyze(const Problem& problem, int min_dim, KktMethod m
   for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
   for (Eigen::VectorXd* v : {&y, &ry, &Ax, &dy, &best_y}) v->setZero(p);
   for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &w_orthant, &h_orthant, &hinv_orthant, &wbar, &lambda, &dz, &ds, &ds_aff, &dz_aff,
-                             &dtmp1, &dtmp2, &dtmp3, &d_s, &ldiv, &best_z, &best_s}) {
+                             &dtmp1, &dtmp2, &dtmp3, &ldiv, &best_z, &best_s}) {
     v->setZero(m);
   }
   for (Eigen::VectorXd* v : {&rhs1, &sol1, &rhs2, &sol2, &full_res, &full_corr}) v->setZero(num_kkt);
   eta.assign(socs.size(), 1.0);
+  {
+    int largest = 0;
+    for (const SocBlock& blk : socs) largest = std::max(largest, blk.dim);
+    local_cone.assign(largest, 0.0);
+  }
   analyzed = true;
 }
 
@@ -979,36 +991,6 @@ void Solver::Workspace::SetIdentityScaling() {
   }
 }
 
-void Solver::Workspace::ApplyW(const double* in, double* out) const {
-  for (int i = 0; i < num_orthant; ++i) out[i] = w_orthant[i] * in[i];
-  for (std::size_t k = 0; k < socs.size(); ++k) {
-    const SocBlock& blk = socs[k];
-    const double* w = wbar.data() + blk.start;
-    if (blk.dim == 3) {
-      ApplyWCone<3>(w, eta[k], in + blk.start, out + blk.start, 3);
-    } else {
-      ApplyWCone<0>(w, eta[k], in + blk.start, out + blk.start, blk.dim);
-    }
-  }
-}
-
-void Solver::Workspace::ApplyWinv(const double* in, double* out) const {
-  // W^{-1} = J Wbar J / eta.
-  for (int i = 0; i < num_orthant; ++i) out[i] = in[i] / w_orthant[i];
-  for (std::size_t k = 0; k < socs.size(); ++k) {
-    const SocBlock& blk = socs[k];
-    const double* w = wbar.data() + blk.start;
-    const double* v = in + blk.start;
-    double* o = out + blk.start;
-    double w1v1 = 0.0;
-    for (int i = 1; i < blk.dim; ++i) w1v1 += w[i] * v[i];
-    const double coef = -v[0] + w1v1 / (1.0 + w[0]);
-    const double inv = 1.0 / eta[k];
-    o[0] = inv * (w[0] * v[0] - w1v1);
-    for (int i = 1; i < blk.dim; ++i) o[i] = inv * (v[i] + coef * w[i]);
-  }
-}
-
 template <bool Inverse>
 void Solver::Workspace::ApplyH(const double* in, double* out) const {
   const double* h = Inverse ? hinv_orthant.data() : h_orthant.data();
@@ -1022,55 +1004,6 @@ void Solver::Workspace::ApplyH(const double* in, double* out) const {
       ApplyHCone<0, Inverse>(w, eta[k], in + blk.start, out + blk.start, blk.dim);
     }
   }
-}
-
-void Solver::Workspace::JordanProduct(const double* u, const double* v, double* out) const {
-  for (int i = 0; i < num_orthant; ++i) out[i] = u[i] * v[i];
-  for (const SocBlock& blk : socs) {
-    const double* a = u + blk.start;
-    const double* c2 = v + blk.start;
-    double* o = out + blk.start;
-    double dot = a[0] * c2[0];
-    for (int i = 1; i < blk.dim; ++i) dot += a[i] * c2[i];
-    for (int i = 1; i < blk.dim; ++i) o[i] = a[0] * c2[i] + c2[0] * a[i];
-    o[0] = dot;
-  }
-}
-
-void Solver::Workspace::JordanDivide(const double* l, const double* v, double* out) const {
-  for (int i = 0; i < num_orthant; ++i) out[i] = v[i] / l[i];
-  for (const SocBlock& blk : socs) {
-    const double* a = l + blk.start;
-    const double* c2 = v + blk.start;
-    double* o = out + blk.start;
-    double a1 = 0.0, a1c1 = 0.0;
-    for (int i = 1; i < blk.dim; ++i) {
-      a1 += a[i] * a[i];
-      a1c1 += a[i] * c2[i];
-    }
-    const double det = a[0] * a[0] - a1;
-    const double u0 = (a[0] * c2[0] - a1c1) / det;
-    for (int i = 1; i < blk.dim; ++i) o[i] = (c2[i] - u0 * a[i]) / a[0];
-    o[0] = u0;
-  }
-}
-
-double Solver::Workspace::MaxStep(const double* u, const double* d) const {
-  double alpha = std::numeric_limits<double>::infinity();
-  if (num_orthant > 0) {
-    // The largest -d_i / u_i (u > 0) gives the smallest ratio u_i / -d_i; one vectorized pass.
-    const double worst = (-Eigen::Map<const Eigen::ArrayXd>(d, num_orthant) /
-                          Eigen::Map<const Eigen::ArrayXd>(u, num_orthant))
-                             .maxCoeff();
-    if (worst > 0.0) alpha = 1.0 / worst;
-  }
-  for (const SocBlock& blk : socs) {
-    const double root = blk.dim == 3 ? MaxStepCone<3>(u + blk.start, d + blk.start, 3)
-                                     : MaxStepCone<0>(u + blk.start, d + blk.start, blk.dim);
-    if (root == 0.0) return 0.0;
-    alpha = std::min(alpha, root);
-  }
-  return alpha;
 }
 
 double Solver::Workspace::MinEigenvalue(const double* u) const {
@@ -1099,6 +1032,151 @@ bool Solver::Workspace::StrictlyInterior(const double* u) const {
 void Solver::Workspace::AddIdentity(double* u, double alpha) const {
   for (int i = 0; i < num_orthant; ++i) u[i] += alpha;
   for (const SocBlock& blk : socs) u[blk.start] += alpha;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fused passes of the Newton step.
+
+namespace {
+
+// out = u o v for one cone.
+template <int D>
+inline void JordanProductCone(const double* u, const double* v, double* out, int dim) {
+  const int d = D > 0 ? D : dim;
+  double dot = u[0] * v[0];
+  for (int i = 1; i < d; ++i) dot += u[i] * v[i];
+  for (int i = 1; i < d; ++i) out[i] = u[0] * v[i] + v[0] * u[i];
+  out[0] = dot;
+}
+
+// out = l \ v for one cone (l strictly inside).
+template <int D>
+inline void JordanDivideCone(const double* l, const double* v, double* out, int dim) {
+  const int d = D > 0 ? D : dim;
+  double l1 = 0.0, l1v1 = 0.0;
+  for (int i = 1; i < d; ++i) {
+    l1 += l[i] * l[i];
+    l1v1 += l[i] * v[i];
+  }
+  const double det = l[0] * l[0] - l1;
+  const double u0 = (l[0] * v[0] - l1v1) / det;
+  const double inv_l0 = 1.0 / l[0];
+  for (int i = 1; i < d; ++i) out[i] = (v[i] - u0 * l[i]) * inv_l0;
+  out[0] = u0;
+}
+
+}  // namespace
+
+void Solver::Workspace::ComplementarityRhs(bool corrector, double sigma_mu, double eta_r, double* rhs_z) {
+  const double* l = lambda.data();
+  const double* a = ds_aff.data();
+  const double* b = dz_aff.data();
+  const double* r = rz.data();
+  double* ld = ldiv.data();
+  double* t2 = dtmp2.data();
+  for (int i = 0; i < num_orthant; ++i) {
+    double d = l[i] * l[i];
+    if (corrector) d += a[i] * b[i] - sigma_mu;
+    ld[i] = d / l[i];
+    t2[i] = w_orthant[i] * ld[i];
+    rhs_z[i] = -eta_r * r[i] + t2[i];
+  }
+  double d[64];
+  std::vector<double>& big = local_cone;
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const int o = blk.start;
+    const double* w = wbar.data() + o;
+    double* dv = blk.dim <= 64 ? d : big.data();
+    if (blk.dim == 3) {
+      JordanProductCone<3>(l + o, l + o, dv, 3);
+      if (corrector) {
+        double e[3];
+        JordanProductCone<3>(a + o, b + o, e, 3);
+        for (int i = 0; i < 3; ++i) dv[i] += e[i];
+        dv[0] -= sigma_mu;
+      }
+      JordanDivideCone<3>(l + o, dv, ld + o, 3);
+      ApplyWCone<3>(w, eta[k], ld + o, t2 + o, 3);
+      for (int i = 0; i < 3; ++i) rhs_z[o + i] = -eta_r * r[o + i] + t2[o + i];
+    } else {
+      const int dim = blk.dim;
+      JordanProductCone<0>(l + o, l + o, dv, dim);
+      if (corrector) {
+        // The Jordan product added entry by entry (no second buffer for large cones).
+        double dot = a[o] * b[o];
+        for (int i = 1; i < dim; ++i) {
+          dot += a[o + i] * b[o + i];
+          dv[i] += a[o] * b[o + i] + b[o] * a[o + i];
+        }
+        dv[0] += dot - sigma_mu;
+      }
+      JordanDivideCone<0>(l + o, dv, ld + o, dim);
+      ApplyWCone<0>(w, eta[k], ld + o, t2 + o, dim);
+      for (int i = 0; i < dim; ++i) rhs_z[o + i] = -eta_r * r[o + i] + t2[o + i];
+    }
+  }
+}
+
+double Solver::Workspace::CompleteDirection() {
+  const double* l = lambda.data();
+  const double* dzv = dz.data();
+  const double* ld = ldiv.data();
+  const double* t2 = dtmp2.data();
+  double* dza = dz_aff.data();
+  double* dsa = ds_aff.data();
+  double* dsv = ds.data();
+  for (int i = 0; i < num_orthant; ++i) {
+    const double w = w_orthant[i];
+    dza[i] = w * dzv[i];
+    dsv[i] = -t2[i] - w * dza[i];
+    dsa[i] = -ld[i] - dza[i];
+  }
+  double alpha = std::numeric_limits<double>::infinity();
+  if (num_orthant > 0) {
+    const auto lo = Eigen::Map<const Eigen::ArrayXd>(l, num_orthant);
+    const double worst = std::max((-Eigen::Map<const Eigen::ArrayXd>(dsa, num_orthant) / lo).maxCoeff(),
+                                  (-Eigen::Map<const Eigen::ArrayXd>(dza, num_orthant) / lo).maxCoeff());
+    if (worst > 0.0) alpha = 1.0 / worst;
+  }
+  double tmp[64];
+  std::vector<double>& big = local_cone;
+  for (std::size_t k = 0; k < socs.size(); ++k) {
+    const SocBlock& blk = socs[k];
+    const int o = blk.start;
+    const double* w = wbar.data() + o;
+    double root_s, root_z;
+    if (blk.dim == 3) {
+      ApplyWCone<3>(w, eta[k], dzv + o, dza + o, 3);
+      ApplyWCone<3>(w, eta[k], dza + o, tmp, 3);
+      for (int i = 0; i < 3; ++i) {
+        dsv[o + i] = -t2[o + i] - tmp[i];
+        dsa[o + i] = -ld[o + i] - dza[o + i];
+      }
+      root_s = MaxStepCone<3>(l + o, dsa + o, 3);
+      root_z = MaxStepCone<3>(l + o, dza + o, 3);
+    } else {
+      const int dim = blk.dim;
+      double* tv = dim <= 64 ? tmp : big.data();
+      ApplyWCone<0>(w, eta[k], dzv + o, dza + o, dim);
+      ApplyWCone<0>(w, eta[k], dza + o, tv, dim);
+      for (int i = 0; i < dim; ++i) {
+        dsv[o + i] = -t2[o + i] - tv[i];
+        dsa[o + i] = -ld[o + i] - dza[o + i];
+      }
+      root_s = MaxStepCone<0>(l + o, dsa + o, dim);
+      root_z = MaxStepCone<0>(l + o, dza + o, dim);
+    }
+    if (root_s == 0.0 || root_z == 0.0) return 0.0;
+    alpha = std::min(alpha, std::min(root_s, root_z));
+  }
+  return alpha;
+}
+
+bool Solver::Workspace::TrialPoint(double step) {
+  dtmp1 = s + step * ds;
+  dtmp3 = z + step * dz;
+  return StrictlyInterior(dtmp1.data()) && StrictlyInterior(dtmp3.data());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1651,18 +1729,15 @@ Result Solver::Solve(const Problem& problem) {
     W.rhs1.segment(n + p, m) = W.h;
 
     // Right-hand side of a Newton direction for the residual weight `eta_r` and complementarity
-    // right-hand side W.d_s (cones): rhs2, with ldiv = lambda \ d_s and dtmp2 = W ldiv.
-    auto direction_rhs = [&](double eta_r) {
-      W.JordanDivide(W.lambda.data(), W.d_s.data(), W.ldiv.data());
-      W.ApplyW(W.ldiv.data(), W.dtmp2.data());
+    // right-hand side d_s (see ComplementarityRhs): rhs2, with ldiv = lambda \ d_s and dtmp2 = W ldiv.
+    auto direction_rhs = [&](bool corrector, double sigma_mu, double eta_r) {
+      W.ComplementarityRhs(corrector, sigma_mu, eta_r, W.rhs2.data() + n + p);
       W.rhs2.head(n) = -eta_r * W.rx;
       W.rhs2.segment(n, p) = -eta_r * W.ry;
-      W.rhs2.segment(n + p, m) = -eta_r * W.rz + W.dtmp2;
       if (N > n + p + m) W.rhs2.tail(N - n - p - m).setZero();
     };
     // The predictor's right-hand side: d_s = lambda o lambda.
-    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
-    direction_rhs(1.0);
+    direction_rhs(false, 0.0, 1.0);
     W.SolveKkt2(W.rhs1, W.sol1, W.rhs2, W.sol2);
     const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
                          W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
@@ -1670,6 +1745,7 @@ Result Solver::Solve(const Problem& problem) {
     // Completes the Newton direction whose rhs2 is set and (if `solved`) solved into sol2. Fills dx,
     // dy, dz, ds, and W^{-1} ds, W dz (in ds_aff, dz_aff, for the step length and the corrector);
     // returns (dtau, dkappa).
+    double cone_step = 0.0;  // set by direction: the cones' step limit
     auto direction = [&](double eta_r, double d_kappa, int refinement_steps, bool solved, double& dtau,
                          double& dkappa) {
       if (!solved) W.SolveKkt(W.rhs2, W.sol2, options_, 0);
@@ -1692,10 +1768,7 @@ Result Solver::Solve(const Problem& problem) {
         W.dz = W.sol2.segment(n + p, m) + dtau * W.sol1.segment(n + p, m);
       }
       // ds = -W (lambda \ d_s) - W'W dz, so W^{-1} ds = -(lambda \ d_s) - W dz.
-      W.ApplyW(W.dz.data(), W.dz_aff.data());
-      W.ApplyW(W.dz_aff.data(), W.dtmp3.data());
-      W.ds = -W.dtmp2 - W.dtmp3;
-      W.ds_aff = -W.ldiv - W.dz_aff;
+      cone_step = W.CompleteDirection();
       dkappa = -(d_kappa + kappa * dtau) / tau;
     };
     // Step to the boundary, computed in the scaled space: s + a ds in K iff lambda + a W^{-1} ds in K,
@@ -1703,8 +1776,7 @@ Result Solver::Solve(const Problem& problem) {
     // root of the cone's quadratic is well conditioned there, unlike at s or z themselves.
     // Uses W^{-1} ds in ds_aff and W dz in dz_aff (set by direction).
     auto max_step = [&](double dtau, double dkappa) {
-      double alpha = std::min(W.MaxStep(W.lambda.data(), W.ds_aff.data()),
-                              W.MaxStep(W.lambda.data(), W.dz_aff.data()));
+      double alpha = cone_step;
       if (dtau < 0.0) alpha = std::min(alpha, -tau / dtau);
       if (dkappa < 0.0) alpha = std::min(alpha, -kappa / dkappa);
       return alpha;
@@ -1718,13 +1790,9 @@ Result Solver::Solve(const Problem& problem) {
     sigma = std::min(1.0, std::max(0.0, sigma));
 
     // ---- corrector: d_s = lambda o lambda + (W^{-1} ds_a) o (W dz_a) - sigma mu e ----
-    W.JordanProduct(W.ds_aff.data(), W.dz_aff.data(), W.dtmp1.data());  // set by direction
-    W.JordanProduct(W.lambda.data(), W.lambda.data(), W.d_s.data());
-    W.d_s += W.dtmp1;
-    W.AddIdentity(W.d_s.data(), -sigma * mu);
     const double d_kappa = tau * kappa + dtau_a * dkappa_a - sigma * mu;
     double dtau = 0.0, dkappa = 0.0;
-    direction_rhs(1.0 - sigma);
+    direction_rhs(true, sigma * mu, 1.0 - sigma);  // ds_aff, dz_aff set by the predictor's direction
     direction(1.0 - sigma, d_kappa, options_.max_refinement_steps, false, dtau, dkappa);
     step = std::min(1.0, options_.step_fraction * max_step(dtau, dkappa));
     iteration_refinements = W.refinement_counter - refinements_before;
@@ -1746,10 +1814,7 @@ Result Solver::Solve(const Problem& problem) {
     // point is strictly interior so that the next scaling exists.
     bool interior = false;
     for (int attempt = 0; attempt < 40 && step >= options_.min_step; ++attempt) {
-      W.dtmp1 = W.s + step * W.ds;
-      W.dtmp3 = W.z + step * W.dz;
-      if (W.tau + step * dtau > 0.0 && W.kappa + step * dkappa > 0.0 && W.StrictlyInterior(W.dtmp1.data()) &&
-          W.StrictlyInterior(W.dtmp3.data())) {
+      if (W.tau + step * dtau > 0.0 && W.kappa + step * dkappa > 0.0 && W.TrialPoint(step)) {
         interior = true;
         break;
       }
