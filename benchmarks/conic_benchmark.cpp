@@ -3,7 +3,8 @@
 //   BM_Temporal/N         the temporal-stage SOCP with N cells (banded, N+1 small rotated cones per
 //                         family, one rotated cone of dimension N+2), three axes of linear limits;
 //   BM_RandomSocp/n       random sparse SOCPs with n variables, strictly feasible primal and dual;
-//   BM_TemporalSlope, BM_RandomSocpSlope
+//   BM_TemporalAugmented/N  the same with KktMethod::kAugmentedSparse forced;
+//   BM_TemporalSlope, BM_TemporalAugmentedSlope, BM_RandomSocpSlope
 //                         log-log least-squares slope of the median solve time against the number
 //                         of variables over the sizes measured before them.
 // Each timed iteration is one Solve() on a reused Solver (the re-planning case: ordering, symbolic
@@ -11,56 +12,50 @@
 // ended with Result::reduced_accuracy), median_ms (median wall time over the timed solves),
 // median_cpu_ms (median CPU time of the solving thread), cpu_ms_per_ipm_iteration, analyze_ms (first
 // solve, including ordering and symbolic analysis), kkt (KKT dimension), nnz_l (non-zeros of L),
-// n (variables), p (equalities), m (cone rows).
-// Run: build-conic2/conic_benchmark --benchmark_counters_tabular=true
-//      (build: cmake -S . -B build-conic2 -DCMAKE_BUILD_TYPE=Release && cmake --build build-conic2 -j1
-//       --target conic_benchmark)
+// n (variables), p (equalities), m (cone rows), refinements (iterative refinement steps of the
+// solve), reduced_kkt (1 if the reduced banded KKT method ran).
+// Run: build/conic_benchmark --benchmark_counters_tabular=true --benchmark_repetitions=3
+//      --benchmark_report_aggregates_only=true
 //
-// Measured 2026-11-22 04:07 UTC, commit 9c52285 (Release -O3, 2-core 2.6 GHz EPYC VM shared with
-// another build, single thread; CPU-time medians of the solving thread; N >= 12,500: one timed solve):
+// Measured 2026-11-22 06:08 UTC (Release -O3, 2-core 2.6 GHz EPYC VM, single thread; CPU-time medians
+// of the solving thread over 3 repetitions). Automatic KKT method = reduced banded on these problems
+// (z eliminated, RCM-ordered skyline LDL', the big cone as two border rows); "augmented" forces the
+// AMD-ordered sparse LDL' of the full system (BM_TemporalAugmented).
 //
-//   temporal  N cells   n vars  KKT rows  nnz(L)   IPM its  ms/its   median ms  accuracy
-//              250       1,003     5,261    14,249     20     0.28        5.5    full
-//              500       2,003    10,511    28,499     20     0.55       11.0    full  (m=10, K=50)
-//            1,250       5,003    26,261    71,249     23     1.53       35.1    full
-//            2,500      10,003    52,511   146,270     30     3.72      112      reduced
-//            6,250      25,003   131,261   365,645     35    15.1       530      reduced
-//           12,500      50,003   262,511   731,270     46    25.1      1153      reduced
-//           25,000     100,003   525,011 1,462,520     35    51.4      1800      reduced
-//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.35 (per iteration: 1.14;
-//   the rest is the iteration count, which grows where accuracy stalls)
+//   temporal  N cells   n vars  reduced: KKT rows  profile   its  ms/its  median ms | augmented: its  median ms
+//              250       1,003            1,259     6,275     20   0.28       5.5   |            20        5.2
+//              500       2,003            2,509    12,525     20   0.56      11.2   |            20       10.5
+//            1,250       5,003            6,259    31,275     23   1.48      33.9   |            23       31.7
+//            2,500      10,003           12,509    62,525     25   3.24      81     |            35 (r)  104
+//            6,250      25,003           31,259   156,275     26   8.92     232     |            33 (r)  315
+//           12,500      50,003           62,509   312,525     26  19.1      496     |            43 (r)  844
+//           25,000     100,003          125,009   625,025     28  41.5     1162     |            41 (r) 1717
+//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.16 (augmented: 1.30)
+//   (r) = kOptimal with Result::reduced_accuracy; the reduced method reaches full accuracy at every size.
 //
-//   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy
-//            1,000      3,750     30,524    12     0.66       7.9    full
-//            3,000     11,250     92,813    16     2.35      37.6    full
-//           10,000     37,500    320,225    18     9.08     164      reduced
-//           30,000    112,500    982,367    24    29.2      700      full
-//          100,000    375,000  3,459,990    35   100       3518      full
-//   log-log slope: 1.31
+//   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy   (augmented: G is wide)
+//            1,000      3,750     30,524    12     0.65       7.8    full
+//            3,000     11,250     92,813    16     2.21      35.4    full
+//           10,000     37,500    320,225    17     8.67     147      reduced
+//           30,000    112,500    982,367    24    28.1      675      full
+//          100,000    375,000  3,459,993    35    98.6     3449      full
+//   log-log slope: 1.30
 //
-// Before (commit 7ef16ad's table, same machine, quieter): temporal 0.35 / 0.89 / 1.99 / 4.68 ms per
-// iteration and 7.1 / 17.8 / 43.9 / 145 ms total at N = 250 / 500 / 1,250 / 2,500. A same-moment A/B
-// of the two versions (a driver timing Solve() on TemporalProblem, 11 solves, median CPU ms) gave
-// 6.8 -> 5.2..6.7 (N=250), 13.6 -> 10.8 (500), 46.5 -> 35.8 (1,250, now full accuracy),
-// 162 -> 125 (2,500), 687 -> 468 (6,250).
-//
-// "reduced": kOptimal with Result::reduced_accuracy (relative gap ~1e-8..3e-7 instead of 1e-8).
 // The targets (about 5,000 variables: <= 25 iterations and <= 2 ms; slope <= 1.1) are NOT
-// met: at N = 1,250 (5,003 variables) 23 iterations take 35 ms.
+// met: at N = 1,250 (5,003 variables) 23 iterations take 34 ms; slope 1.16.
 //
-// Where the time goes (perf record on N = 500 and 1,250, after the changes): numeric factorization
-// 16%, triangular solves 20% (one two-right-hand-side sweep, one single solve and ~1.5 refinement
-// solves per iteration), KKT products for refinement 10%, step lengths 8%, NT scaling 5%, W products
-// and Jordan operations 8%, vector updates in Solve() 8-14%. Hot-loop timings at N = 500 (10,511 rows,
-// nnz(L) 28,499, 85,719 multiply-adds): factorization 90 us, solve 35 us, KKT product 22 us; all
-// three cost ~1.2 ns per stored entry and grow linearly (N = 2,500: 480 / 180 / 122 us). Nothing
-// unexpected dominates; the cost is the number of passes over ~1e5 indirectly addressed entries.
-// Measured and rejected: reverse Cuthill-McKee (nnz(L) 75,809 vs 28,499 for AMD at N = 500; AMD
-// eliminates the cone rows as leaves with almost no fill); eliminating the orthant rows in closed
-// form before factorizing (nnz(L) 18k instead of 28.5k but the extra passes cost as much as they
-// save); a column-oriented forward solve without the row-wise copy of L (slower: scatter instead of
-// gather); the scaled KKT form W^{-1}G / -I for the 3x3 cone blocks (no dynamic regularizations
-// left, but the stall near the optimum remains and refinement costs more).
+// Where the time goes (timers inside Solve on the real temporal problem at m=10, K=50: n 1,498,
+// m 5,166 cone rows of which 2,169 orthant and 999 rotated 3-cones, nnz(G) 6,328, profile 3,987;
+// ~340 us per iteration): NT scaling 34 us, assembly 25 us, skyline factor 22 us, 3.2 reduced solves
+// of ~30 us (rhs 8, skyline 12, recovery of z 10), refinement products 2.2 x 15 us, the fused
+// complementarity right-hand sides 2 x 12 us and direction completions with step limits 2 x 30 us,
+// the rest in residuals and vector updates. No part dominates; the factorization is < 10%. Both KKT
+// methods cost the same per iteration on the temporal problem (measured with the method forced: 5.89
+// vs 5.86 ms at m=10, K=50), so the 2 ms target needs ~3x less work per cone row, not a better
+// factorization. Measured and rejected: refinement in the reduced space (iterations doubled: it misses
+// the rounding of forming G'W^{-2}G), smaller static regularization, looser refinement tolerance,
+// precomputed 1/eta and 1/(1+w0) (no gain beyond noise), reverse Cuthill-McKee for the augmented
+// system (more fill than AMD), closed-form orthant elimination in the augmented system.
 
 #include <time.h>
 
@@ -231,8 +226,11 @@ std::map<int, double>& Medians(const char* family) {
   return medians[family];
 }
 
-void RunSolves(benchmark::State& state, const Problem& problem, const char* family) {
-  Solver solver;
+void RunSolves(benchmark::State& state, const Problem& problem, const char* family,
+               timeopt::conic::KktMethod method = timeopt::conic::KktMethod::kAutomatic) {
+  Solver::Options options;
+  options.kkt_method = method;
+  Solver solver(options);
   auto t0 = std::chrono::steady_clock::now();
   Result result = solver.Solve(problem);
   const double analyze_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -301,6 +299,16 @@ BENCHMARK(BM_Temporal)->Arg(250)->Arg(500)->Arg(1250)->Arg(2500)->Arg(6250)->Arg
     ->Unit(benchmark::kMillisecond)->MinTime(0.5);
 void BM_TemporalSlope(benchmark::State& state) { Slope(state, "temporal"); }
 BENCHMARK(BM_TemporalSlope)->Iterations(1);
+// The same problems with the augmented sparse KKT method forced (the automatic choice is the reduced
+// banded one), for comparison.
+void BM_TemporalAugmented(benchmark::State& state) {
+  const Problem problem = TemporalProblem(static_cast<int>(state.range(0)), 1);
+  RunSolves(state, problem, "temporal_augmented", timeopt::conic::KktMethod::kAugmentedSparse);
+}
+BENCHMARK(BM_TemporalAugmented)->Arg(250)->Arg(500)->Arg(1250)->Arg(2500)->Arg(6250)->Arg(12500)->Arg(25000)
+    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+void BM_TemporalAugmentedSlope(benchmark::State& state) { Slope(state, "temporal_augmented"); }
+BENCHMARK(BM_TemporalAugmentedSlope)->Iterations(1);
 
 void BM_RandomSocp(benchmark::State& state) {
   const Problem problem = RandomSocp(static_cast<int>(state.range(0)), 2);

@@ -231,7 +231,9 @@ TEST_P(KnownOptimumTest, ReachesTheClosedFormOptimum) {
   const double scale = std::max(1.0, std::abs(param.example.optimal_value));
   EXPECT_NEAR(result.primal_objective, param.example.optimal_value, 1e-7 * scale) << result.BriefReport();
   EXPECT_NEAR(result.dual_objective, param.example.optimal_value, 1e-7 * scale) << result.BriefReport();
-  EXPECT_LE(result.primal_residual, 1e-8);
+  // The solver stops on its residuals in internal coordinates, where the first two rows of every
+  // rotated cone are turned by 45 degrees; turned back, an infinity norm can grow by up to sqrt(2).
+  EXPECT_LE(result.primal_residual, std::sqrt(2.0) * 1e-8);
   EXPECT_LE(result.dual_residual, 1e-8);
   if (param.example.optimal_x.size() > 0) {
     // These optima are unique and the problems well conditioned (strict complementarity), so x is

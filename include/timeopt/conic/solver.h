@@ -124,6 +124,8 @@ struct Result {
   double dual_objective = 0.0;     ///< -b'y - h'z.
   double gap = 0.0;                ///< Absolute complementarity gap s'z.
   /// max(||Ax-b||_inf, ||Gx+s-h||_inf) / max(1, ||b||_inf, ||h||_inf, ||Ax||_inf, ||Gx||_inf, ||s||_inf).
+  /// The stopping test measures it in the solver's internal coordinates, where the first two rows of
+  /// each rotated cone are turned by 45 degrees, so here it can exceed the tolerance by up to sqrt(2).
   double primal_residual = 0.0;
   /// ||c + A'y + G'z||_inf / max(1, ||c||_inf, ||A'y||_inf, ||G'z||_inf).
   double dual_residual = 0.0;
