@@ -425,6 +425,12 @@ struct Solver::Workspace {
   void FullKktMultiply(const Eigen::VectorXd& v, Eigen::VectorXd& out);
   void RefineReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                      int max_refinement_steps);
+  // The refinement loop shared by both methods, on the first `len` entries: multiply(v, out) sets
+  // out = K v (unregularized), correct(r, out) sets out = K~^{-1} r (the factor). res and cand are
+  // work vectors. Returns true if sol changed.
+  template <typename Multiply, typename Correct>
+  bool Refine(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, Eigen::VectorXd& res, Eigen::VectorXd& cand,
+              int len, const Options& options, int max_steps, Multiply multiply, Correct correct);
   // Solves K sol = rhs (unpermuted vectors) with iterative refinement on the unregularized matrix.
   void SolveKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
                 int max_refinement_steps);
@@ -1352,26 +1358,37 @@ void Solver::Workspace::FullKktMultiply(const Eigen::VectorXd& v, Eigen::VectorX
 // Refinement on the full unregularized system: its residual also catches the rounding of forming
 // G' W^{-2} G (entries of W^{-2} span many orders of magnitude near the optimum), which refining the
 // reduced system alone does not (measured: twice the iterations on the temporal problems).
-void Solver::Workspace::RefineReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
-                                      int max_refinement_steps) {
-  const int len = n + p + m;
+template <typename Multiply, typename Correct>
+bool Solver::Workspace::Refine(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, Eigen::VectorXd& res,
+                               Eigen::VectorXd& cand, int len, const Options& options, int max_steps,
+                               Multiply multiply, Correct correct) {
   const double bound = options.refinement_tolerance * (1.0 + NormInf(rhs.data(), len));
-  FullKktMultiply(sol, full_res);
-  full_res.head(len) = rhs.head(len) - full_res.head(len);
-  double norm = NormInf(full_res.data(), len);
-  for (int step = 0; step < max_refinement_steps && norm > bound; ++step) {
+  multiply(sol, res);
+  res.head(len) = rhs.head(len) - res.head(len);
+  double norm = NormInf(res.data(), len);
+  bool changed = false;
+  for (int step = 0; step < max_steps && norm > bound; ++step) {
     // Candidate sol + K~^{-1} r, accepted only if it reduces the residual of the exact system.
-    SolveReduced(full_res, full_corr);
-    full_corr.head(len) += sol.head(len);
-    FullKktMultiply(full_corr, full_res);
-    full_res.head(len) = rhs.head(len) - full_res.head(len);
-    const double new_norm = NormInf(full_res.data(), len);
+    correct(res, cand);
+    cand.head(len) += sol.head(len);
+    multiply(cand, res);
+    res.head(len) = rhs.head(len) - res.head(len);
+    const double new_norm = NormInf(res.data(), len);
     ++refinement_counter;
     if (!(new_norm < norm)) break;  // no progress (or NaN): keep the previous solution
-    sol.head(len) = full_corr.head(len);
-    if (new_norm > options.refinement_stagnation * norm) break;
+    sol.head(len) = cand.head(len);
+    changed = true;
+    if (new_norm > options.refinement_stagnation * norm) break;  // slow: not worth another solve
     norm = new_norm;
   }
+  return changed;
+}
+
+void Solver::Workspace::RefineReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const Options& options,
+                                      int max_refinement_steps) {
+  Refine(rhs, sol, full_res, full_corr, n + p + m, options, max_refinement_steps,
+         [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { FullKktMultiply(v, out); },
+         [&](const Eigen::VectorXd& r, Eigen::VectorXd& out) { SolveReduced(r, out); });
 }
 
 void Solver::Workspace::UpdateKktScaling(double delta) {
@@ -1474,26 +1491,13 @@ void Solver::Workspace::RefineKkt(const Eigen::VectorXd& rhs, Eigen::VectorXd& s
     perm_rhs[k] = rhs[perm[k]];
     perm_sol[k] = sol[perm[k]];
   }
-  const double bound = options.refinement_tolerance * (1.0 + NormInf(perm_rhs.data(), num_kkt));
-  KktMultiplyUnregularized(perm_sol.data(), perm_res.data());
-  perm_res = perm_rhs - perm_res;
-  double norm = NormInf(perm_res.data(), num_kkt);
-  bool changed = false;
-  for (int step = 0; step < max_refinement_steps && norm > bound; ++step) {
-    // Candidate x + K~^{-1} r, accepted only if it reduces the residual of the exact system.
-    perm_corr = perm_res;
-    ldl.Solve(perm_corr.data());
-    perm_corr += perm_sol;
-    KktMultiplyUnregularized(perm_corr.data(), perm_res.data());
-    perm_res = perm_rhs - perm_res;
-    const double new_norm = NormInf(perm_res.data(), num_kkt);
-    ++refinement_counter;
-    if (!(new_norm < norm)) break;  // no progress (or NaN): keep the previous solution
-    perm_sol.swap(perm_corr);
-    changed = true;
-    if (new_norm > options.refinement_stagnation * norm) break;  // slow: not worth another solve
-    norm = new_norm;
-  }
+  const bool changed = Refine(
+      perm_rhs, perm_sol, perm_res, perm_corr, num_kkt, options, max_refinement_steps,
+      [&](const Eigen::VectorXd& v, Eigen::VectorXd& out) { KktMultiplyUnregularized(v.data(), out.data()); },
+      [&](const Eigen::VectorXd& r, Eigen::VectorXd& out) {
+        out = r;
+        ldl.Solve(out.data());
+      });
   if (changed) {
     for (int k = 0; k < num_kkt; ++k) sol[perm[k]] = perm_sol[k];
   }

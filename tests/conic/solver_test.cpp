@@ -272,6 +272,16 @@ std::vector<Solver::Options> BothKktMethods() {
   return all;
 }
 
+// Solves `problem` with each KKT method forced and runs check(result) on each, traced by method.
+template <typename Check>
+void ForBothKktMethods(const Problem& problem, Check check) {
+  for (const Solver::Options& options : BothKktMethods()) {
+    SCOPED_TRACE(ToString(options.kkt_method));
+    Solver solver(options);
+    check(solver.Solve(problem));
+  }
+}
+
 // ------------------------------------------------------------------------------------------------
 // The two KKT methods on a path-shaped problem (the temporal stage's structure): the automatic choice
 // takes the reduced banded method, and both methods reach the same optimum.
@@ -377,11 +387,9 @@ TEST(InfeasibilityTest, PrimalInfeasibleLp) {
   b.AddLessEqual({{0, 1.0}}, 0.0);      // x <= 0
   b.AddEquality({{1, 1.0}}, 2.0);
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    ExpectPrimalInfeasibilityCertificate(problem, solver.Solve(problem));
-  }
+  ForBothKktMethods(problem, [&](const Result& result) {
+    ExpectPrimalInfeasibilityCertificate(problem, result);
+  });
 }
 
 TEST(InfeasibilityTest, PrimalInfeasibleSocAndRotated) {
@@ -410,11 +418,9 @@ TEST(InfeasibilityTest, DualInfeasibleLp) {
   b.AddNonnegative(Var(0));
   b.AddEquality({{1, 1.0}}, 1.0);
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    ExpectDualInfeasibilityCertificate(problem, solver.Solve(problem));
-  }
+  ForBothKktMethods(problem, [&](const Result& result) {
+    ExpectDualInfeasibilityCertificate(problem, result);
+  });
 }
 
 TEST(InfeasibilityTest, DualInfeasibleSoc) {
@@ -426,11 +432,9 @@ TEST(InfeasibilityTest, DualInfeasibleSoc) {
   b.AddSecondOrderCone({Var(0), Var(1)});
   b.AddRotatedCone({Var(0), Const(1.0), Const(0.5)});  // 2 t >= 1/4
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    ExpectDualInfeasibilityCertificate(problem, solver.Solve(problem));
-  }
+  ForBothKktMethods(problem, [&](const Result& result) {
+    ExpectDualInfeasibilityCertificate(problem, result);
+  });
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -453,14 +457,11 @@ TEST(DegenerateTest, RedundantEqualities) {
   b.AddEquality({{0, 1.0}, {1, 1.0}, {2, 1.0}}, 1.0);  // duplicate
   b.AddEquality({{0, 2.0}, {1, 2.0}, {2, 2.0}}, 2.0);  // multiple
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    const Result result = solver.Solve(problem);
+  ForBothKktMethods(problem, [&](const Result& result) {
     ExpectFinite(result);
     ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
     EXPECT_NEAR(result.primal_objective, 1.0, 1e-7);  // same answer as lp_simplex
-  }
+  });
 }
 
 TEST(DegenerateTest, AllZeroRows) {
@@ -472,14 +473,11 @@ TEST(DegenerateTest, AllZeroRows) {
   b.AddEquality({}, 0.0);                // 0 = 0: a zero row of A
   b.AddSecondOrderCone({Const(1.0), Const(0.0), Var(1)});
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    const Result result = solver.Solve(problem);
+  ForBothKktMethods(problem, [&](const Result& result) {
     ExpectFinite(result);
     ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
     EXPECT_NEAR(result.primal_objective, 2.0, 1e-7);
-  }
+  });
 }
 
 TEST(DegenerateTest, ConesWithoutInterior) {
@@ -494,10 +492,7 @@ TEST(DegenerateTest, ConesWithoutInterior) {
   b.AddEquality({{2, 1.0}}, 0.0);
   b.AddSecondOrderCone({Var(2), Var(0), Var(3)});
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    const Result result = solver.Solve(problem);
+  ForBothKktMethods(problem, [&](const Result& result) {
     ExpectFinite(result);
     // No interior means no strictly feasible point: the method still converges, but the achievable
     // accuracy is about sqrt(tolerance), so only a clear status and a close objective are required.
@@ -505,7 +500,7 @@ TEST(DegenerateTest, ConesWithoutInterior) {
                 result.status == Status::kIterationLimit)
         << result.BriefReport();
     EXPECT_NEAR(result.primal_objective, 1.0, 1e-4) << result.BriefReport();
-  }
+  });
 }
 
 TEST(DegenerateTest, EmptyProblemAndNoCones) {
@@ -516,14 +511,11 @@ TEST(DegenerateTest, EmptyProblemAndNoCones) {
   b.AddEquality({{0, 1.0}, {1, 1.0}}, 1.0);
   b.AddEquality({{1, 1.0}}, 3.0);
   const Problem problem = b.Build();
-  for (const Solver::Options& options : BothKktMethods()) {
-    SCOPED_TRACE(ToString(options.kkt_method));
-    Solver solver(options);
-    const Result result = solver.Solve(problem);
+  ForBothKktMethods(problem, [&](const Result& result) {
     ExpectFinite(result);
     ASSERT_EQ(result.status, Status::kOptimal) << result.BriefReport();
     EXPECT_NEAR(result.primal_objective, -2.0, 1e-7);
-  }
+  });
 }
 
 // ------------------------------------------------------------------------------------------------
