@@ -203,6 +203,40 @@ void PruneCellRows(std::vector<CellRow>* rows) {
   r = std::move(kept);
 }
 
+// Of the rows coef * x_v <= upper with coef > 0 (upper bounds on one variable; certified mode makes one
+// per grid point in each of the two cells around it, and fixed neighbours make more) keeps the
+// tightest per variable, in place of the first; the others are implied by it.
+void KeepTightestUpperBounds(TemporalDiscretization* d) {
+  std::vector<int> kept(static_cast<size_t>(d->num_vars), -1);  // row index per variable
+  std::vector<LinearRow>& rows = d->rows;
+  std::vector<bool> drop(rows.size(), false);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const LinearRow& row = rows[r];
+    if (row.terms.size() != 1 || !(row.terms[0].second > 0.0) || std::isfinite(row.lower)) continue;
+    int& k = kept[static_cast<size_t>(row.terms[0].first)];
+    if (k < 0) {
+      k = static_cast<int>(r);
+      continue;
+    }
+    const LinearRow& other = rows[static_cast<size_t>(k)];
+    // Bound upper / coef, compared without dividing: row is tighter iff upper * c_other < u_other * c.
+    if (row.upper * other.terms[0].second < other.upper * row.terms[0].second) {
+      drop[static_cast<size_t>(k)] = true;
+      k = static_cast<int>(r);
+    } else {
+      drop[r] = true;
+    }
+  }
+  size_t out = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (!drop[r]) {
+      if (out != r) rows[out] = std::move(rows[r]);
+      ++out;
+    }
+  }
+  rows.resize(out);
+}
+
 // Boundary grid value from a given velocity and the tangent there.
 GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
                         const TemporalProblem& p, const std::string& field, int* next_var) {
@@ -438,8 +472,12 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
       if (q.cwiseAbs().maxCoeff() > 0.0) {
         const SmallPoly q2 = Multiply(q, q);
-        const SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
-        const SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
+        SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
+        SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
+        // The end coefficients are f'^2 b at the grid points; the other grid value's weight there
+        // is zero exactly (not up to the rounding of the conversion).
+        w0(w0.size() - 1) = 0.0;
+        w1(0) = 0.0;
         for (int j = 0; j < w0.size(); ++j) {
           cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / vmax2(a), LinearRow::Kind::kVelocity});
         }
@@ -468,6 +506,8 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       });
     }
   }
+
+  if (problem.prune_redundant_rows) KeepTightestUpperBounds(&d);
 
   // ---- acceleration change (eqs. 44-45, 48-49) ----
   if (limits.max_acceleration_change) {

@@ -1,5 +1,6 @@
 // The "certified" constraint mode (issue 8): limits that hold on the whole trajectory.
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -110,6 +111,19 @@ TEST(RowPruning, KeepsTheFeasibleSetAndTheOptimum) {
       const TemporalDiscretization dp = Discretize(p), df = Discretize(full);
       ASSERT_EQ(dp.num_vars, df.num_vars);
       EXPECT_LT(dp.rows.size(), df.rows.size());
+      // At most one pruned row is an upper bound on a variable alone (the tightest of those the
+      // cells produce); the full rows have several (both cells around a grid point in certified mode).
+      auto most_upper_bounds = [](const TemporalDiscretization& d) {
+        std::vector<int> count(d.num_vars, 0);
+        for (const LinearRow& row : d.rows) {
+          if (row.terms.size() == 1 && row.terms[0].second > 0.0 && !std::isfinite(row.lower)) {
+            ++count[row.terms[0].first];
+          }
+        }
+        return *std::max_element(count.begin(), count.end());
+      };
+      EXPECT_LE(most_upper_bounds(dp), 1);
+      if (mode == ConstraintMode::kCertified) EXPECT_GE(most_upper_bounds(df), 2);
       const auto socp = MakeSocpTemporalSolver();
       const TemporalResult rp = socp->Solve(p), rf = socp->Solve(full);
       ASSERT_TRUE(rp.is_success()) << rp.message;

@@ -69,8 +69,10 @@ struct TemporalProblem {
   double zero_tangent_tolerance = 1e-9;
 
   // Drop the velocity and acceleration rows of a cell that cannot be active for any b >= 0 (they
-  // lie inside the convex hull of the others). The feasible set and the optimum are unchanged;
-  // only the solve gets faster. Off: every row of the formulation is passed to the solver.
+  // lie inside the convex hull of the others), and keep one row per grid value of the rows that
+  // bound it alone (certified mode: the velocity at a grid point, from both cells around it). The
+  // feasible set and the optimum are unchanged; only the solve gets faster. Off: every row of the
+  // formulation is passed to the solver.
   bool prune_redundant_rows = true;
 
   // Throws std::invalid_argument naming the offending field ("limits.max_velocity[1]: expected a
