@@ -40,8 +40,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out_dir);
   std::ofstream csv(std::filesystem::path(out_dir) / "certified_vs_paper.csv");
-  csv << "# vmax 3,3,2 m/s, amax 2,2,1.5 m/s^2, rho 0, rest to rest, SOCP backend, median of "
-      << repetitions << " solves\n"
+  csv << "# vmax 3,3,2 m/s, amax 2,2,1.5 m/s^2, rho 0, rest to rest, SOCP backend, certified_thinning "
+      << TemporalProblem().certified_thinning << " (default), median of " << repetitions << " solves\n"
       << "curve,kind,K,T_paper,T_certified,increase_percent,paper_ms,certified_ms,time_ratio,"
          "paper_max_acc_ratio,certified_max_acc_ratio,certified_max_vel_ratio,paper_iterations,"
          "certified_iterations\n";

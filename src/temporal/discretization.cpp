@@ -237,6 +237,77 @@ void KeepTightestUpperBounds(TemporalDiscretization* d) {
   rows.resize(out);
 }
 
+// True if x <= l A + (1 - l) C componentwise for some l in [0, 1]: then x . b <= max(A . b, C . b)
+// for every b >= 0, so the row x . b <= 1 follows from A . b <= 1 and C . b <= 1.
+bool Dominated(const Eigen::Vector2d& x, const Eigen::Vector2d& A, const Eigen::Vector2d& C) {
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 2; ++i) {
+    const double diff = A(i) - C(i);  // x_i <= C_i + l diff
+    if (diff > 0.0) {
+      lo = std::max(lo, (x(i) - C(i)) / diff);
+    } else if (diff < 0.0) {
+      hi = std::min(hi, (x(i) - C(i)) / diff);
+    } else if (x(i) > C(i)) {
+      return false;
+    }
+  }
+  return lo <= hi;
+}
+
+// The smallest factor f in {1, 1 + tolerance 2^-6, ..., 1 + tolerance} such that rows [first, last]
+// are all dominated by the rows a and c scaled by f, or 0 if none is.
+double RunFactor(const std::vector<CellRow>& r, size_t first, size_t last, size_t a, size_t c, double tolerance) {
+  for (int k = 7; k >= 0; --k) {
+    const double f = k == 7 ? 1.0 : 1.0 + tolerance * std::ldexp(1.0, -k);
+    const Eigen::Vector2d A = f * r[a].w, C = f * r[c].w;
+    bool ok = true;
+    for (size_t j = first; j <= last && ok; ++j) ok = Dominated(r[j].w, A, C);
+    if (ok) return f;
+  }
+  return 0.0;
+}
+
+// Thins a cell's hull (rows in hull order, as PruneCellRows leaves them) conservatively: a run of
+// vertices between two kept ones is dropped when every vertex of the run is dominated (Dominated)
+// by the kept pair scaled by a factor f <= 1 + tolerance, and the rows of that pair are tightened
+// to f w . b <= 1 (the largest f of the runs next to them). Every original row still follows from
+// the kept ones, so the limits still hold on the whole cell, and b shrinks by at most the factor
+// (T grows by at most half the tolerance, relative). The two ends of the hull are always kept.
+void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
+  std::vector<CellRow>& r = *rows;
+  if (r.size() <= 2 || !(tolerance > 0.0)) return;
+  std::vector<size_t> kept{0};
+  std::vector<double> factor(r.size(), 1.0);
+  size_t run_start = 1;   // first dropped vertex of the current run (empty run if it is i)
+  double run_factor = 1.0;  // the factor the current run needs with its next vertex
+  auto close_run = [&](size_t next) {
+    if (run_start < next) {
+      factor[kept.back()] = std::max(factor[kept.back()], run_factor);
+      factor[next] = std::max(factor[next], run_factor);
+    }
+  };
+  for (size_t i = 1; i + 1 < r.size(); ++i) {
+    const double f = RunFactor(r, run_start, i, kept.back(), i + 1, tolerance);
+    if (f > 0.0) {
+      run_factor = f;  // i joins the run
+      continue;
+    }
+    close_run(i);
+    kept.push_back(i);
+    run_start = i + 1;
+    run_factor = 1.0;
+  }
+  close_run(r.size() - 1);
+  kept.push_back(r.size() - 1);
+  std::vector<CellRow> out;
+  out.reserve(kept.size());
+  for (size_t k : kept) {
+    out.push_back(r[k]);
+    out.back().w *= factor[k];
+  }
+  r = std::move(out);
+}
+
 // Boundary grid value from a given velocity and the tangent there.
 GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
                         const TemporalProblem& p, const std::string& field, int* next_var) {
@@ -496,6 +567,9 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       }
     }
     if (problem.prune_redundant_rows) PruneCellRows(&cell_rows);
+    if (problem.constraint_mode == ConstraintMode::kCertified && problem.prune_redundant_rows) {
+      ThinCellRows(&cell_rows, problem.certified_thinning);
+    }
     for (const CellRow& r : cell_rows) {
       if (r.w(0) <= 0.0 && r.w(1) <= 0.0) continue;  // holds for every b >= 0
       row.Add(c.first_grid, r.w(0));

@@ -68,6 +68,9 @@ void TemporalProblem::Validate() const {
   if (!std::isfinite(rho) || rho < 0.0) {
     throw std::invalid_argument("rho: expected a finite number >= 0, got " + Num(rho));
   }
+  if (!(certified_thinning >= 0.0 && certified_thinning <= 0.01)) {
+    throw std::invalid_argument("certified_thinning: expected a number in [0, 0.01], got " + Num(certified_thinning));
+  }
   CheckPositive(parallel_tolerance, "parallel_tolerance");
   CheckPositive(zero_tangent_tolerance, "zero_tangent_tolerance");
 }

@@ -106,6 +106,7 @@ TEST(RowPruning, KeepsTheFeasibleSetAndTheOptimum) {
   for (ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
     for (const PiecewiseCurve& curve : {NaturalCubicSpline(w), MinimumJerkSpline(w)}) {
       TemporalProblem p = Problem(curve, 10, mode);
+      p.certified_thinning = 0.0;  // exact pruning only (thinning: the next test)
       TemporalProblem full = p;
       full.prune_redundant_rows = false;
       const TemporalDiscretization dp = Discretize(p), df = Discretize(full);
@@ -157,6 +158,64 @@ TEST(RowPruning, KeepsTheFeasibleSetAndTheOptimum) {
       EXPECT_GT(feasible, 0);
     }
   }
+}
+
+// Thinning (TemporalProblem::certified_thinning) only tightens: every x that the thinned rows allow
+// satisfies the exact certified rows (checked at points around both optima, where the rows are
+// nearly active), and T lies between the exact certified T and that T times 1 + thinning / 2 (the
+// bound the thinning guarantees), up to the solver's 1e-8 relative tolerance.
+TEST(CertifiedThinning, ImpliesTheExactRowsAndCostsAtMostHalfTheTolerance) {
+  std::mt19937 rng(31);
+  const auto socp = MakeSocpTemporalSolver();
+  int only_exact = 0;  // points that only the exact rows allow, over all curves
+  for (int c = 0; c < 4; ++c) {
+    const Waypoints w = Walk(rng, 5);
+    TemporalProblem thin = Problem(c % 2 ? MinimumJerkSpline(w) : NaturalCubicSpline(w), 20,
+                                   ConstraintMode::kCertified);
+    thin.certified_thinning = 1e-3;  // larger than the default, so that the effect is measurable
+    TemporalProblem exact = thin;
+    exact.certified_thinning = 0.0;
+    const TemporalDiscretization dt = Discretize(thin), de = Discretize(exact);
+    ASSERT_EQ(dt.num_vars, de.num_vars);
+    EXPECT_LT(dt.rows.size(), de.rows.size());
+
+    const TemporalResult rt = socp->Solve(thin), re = socp->Solve(exact);
+    ASSERT_TRUE(rt.is_success()) << rt.message;
+    ASSERT_TRUE(re.is_success()) << re.message;
+    EXPECT_GE(rt.total_time, re.total_time * (1.0 - 1e-8));
+    EXPECT_LE(rt.total_time, re.total_time * (1.0 + 0.5e-3 + 1e-8));
+    EXPECT_LE(rt.max_acceleration_ratio, 1.0 + 1e-9);
+    EXPECT_LE(rt.max_velocity_ratio, 1.0 + 1e-9);
+
+    // Points around each optimum: a common factor in [0.996, 1.002] (the rows are homogeneous in b,
+    // so it moves across the boundary) times independent factors within 2e-4 of 1 per grid value.
+    std::uniform_real_distribution<double> common(0.996, 1.002), jitter(1.0 - 2e-4, 1.0 + 2e-4);
+    int thin_feasible = 0;
+    for (const TemporalResult* r : {&rt, &re}) {
+      std::vector<double> x0(dt.num_vars);
+      for (int i = 0; i < dt.num_pieces; ++i) {
+        for (int k = 0; k <= 20; ++k) {
+          const GridValue& g = dt.grid[dt.GridIndex(i, k)];
+          if (g.var >= 0) x0[g.var] = r->profile.b(i, k) / g.scale;
+        }
+      }
+      for (int trial = 0; trial < 300; ++trial) {
+        std::vector<double> x = x0;
+        const double t = common(rng);
+        for (double& v : x) v *= t * jitter(rng);
+        // Rows are relative to their limits (violations ~1 for a full violation): 1e-12 is rounding.
+        const bool ft = dt.MaxViolation(x) <= 0.0, fe = de.MaxViolation(x) <= 1e-12;
+        if (ft) {
+          ++thin_feasible;
+          EXPECT_TRUE(fe) << "curve " << c << ": a point the thinned rows allow violates the exact ones";
+        } else if (fe) {
+          ++only_exact;
+        }
+      }
+    }
+    EXPECT_GT(thin_feasible, 0);
+  }
+  EXPECT_GT(only_exact, 0);  // thinning does tighten
 }
 
 }  // namespace

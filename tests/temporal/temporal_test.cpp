@@ -185,6 +185,14 @@ TEST_P(BothBackends, InvalidInputNamesTheField) {
   p = LineProblem(10.0, 10);
   p.rho = -1.0;
   EXPECT_EQ(Solve(p).status, TemporalStatus::kInvalidInput);
+
+  for (double thinning : {-1e-4, 0.5, std::numeric_limits<double>::quiet_NaN()}) {
+    p = LineProblem(10.0, 10);
+    p.certified_thinning = thinning;
+    r = Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput);
+    EXPECT_THAT(r.message, HasSubstr("certified_thinning"));
+  }
 }
 
 Waypoints RandomWaypoints(std::mt19937& rng, int count) {

@@ -75,6 +75,15 @@ struct TemporalProblem {
   // formulation is passed to the solver.
   bool prune_redundant_rows = true;
 
+  // Certified mode, with prune_redundant_rows: the hull of a cell's rows is thinned. Runs of nearly
+  // parallel rows (Bernstein coefficients of a smooth polynomial) are dropped when the two rows around
+  // them, tightened by a factor f <= 1 + certified_thinning, imply them; those rows are then tightened
+  // by f. The result is never looser than the coefficients (the limits still hold on every cell) and
+  // T grows by at most certified_thinning / 2 relative; the solve needs fewer rows and iterations
+  // (measured on 20 random curves at K = 50: 1.36x -> 1.14x paper mode's solve time for +0.005% T;
+  // see experiments/certified_vs_paper.cpp). 0 keeps the exact hull. In [0, 0.01].
+  double certified_thinning = 3e-4;
+
   // Throws std::invalid_argument naming the offending field ("limits.max_velocity[1]: expected a
   // positive finite number, got -1").
   void Validate() const;
