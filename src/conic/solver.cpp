@@ -388,11 +388,9 @@ struct Solver::Workspace {
 
   // Cone operations on vectors of size m.
   bool ComputeScaling();
-  void SetIdentityScaling();
   // out = W'W in (Inverse false) or (W'W)^{-1} in (Inverse true).
   template <bool Inverse>
   void ApplyH(const double* in, double* out) const;
-  double MinEigenvalue(const double* u) const;  // orthant: u_i, SOC: u0 - ||u1||
   bool StrictlyInterior(const double* u) const;  // the test that ComputeScaling relies on
   void AddIdentity(double* u, double alpha) const;
 
@@ -986,17 +984,6 @@ bool Solver::Workspace::ComputeScaling() {
   return true;
 }
 
-void Solver::Workspace::SetIdentityScaling() {
-  w_orthant.setOnes();
-  h_orthant.setOnes();
-  hinv_orthant.setOnes();
-  wbar.setZero();
-  for (std::size_t k = 0; k < socs.size(); ++k) {
-    wbar[socs[k].start] = 1.0;
-    eta[k] = 1.0;
-  }
-}
-
 template <bool Inverse>
 void Solver::Workspace::ApplyH(const double* in, double* out) const {
   const double* h = Inverse ? hinv_orthant.data() : h_orthant.data();
@@ -1010,17 +997,6 @@ void Solver::Workspace::ApplyH(const double* in, double* out) const {
       ApplyHCone<0, Inverse>(w, eta[k], in + blk.start, out + blk.start, blk.dim);
     }
   }
-}
-
-double Solver::Workspace::MinEigenvalue(const double* u) const {
-  double r = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < num_orthant; ++i) r = std::min(r, u[i]);
-  for (const SocBlock& blk : socs) {
-    double n1 = 0.0;
-    for (int i = 1; i < blk.dim; ++i) n1 += u[blk.start + i] * u[blk.start + i];
-    r = std::min(r, u[blk.start] - std::sqrt(n1));
-  }
-  return r;
 }
 
 bool Solver::Workspace::StrictlyInterior(const double* u) const {
@@ -1544,27 +1520,18 @@ Result Solver::Solve(const Problem& problem) {
   const double norm_h = NormInf(W.h.data(), m);
   int dynamic_regs = 0;
 
-  // ---- initial point: two solves with the identity scaling ----
-  W.SetIdentityScaling();
-  dynamic_regs += W.FactorKkt(options_);
-  W.rhs1.setZero();
-  W.rhs1.segment(n, p) = W.b;
-  W.rhs1.segment(n + p, m) = W.h;
-  W.SolveKkt(W.rhs1, W.sol1, options_, options_.max_refinement_steps);
-  W.x = W.sol1.head(n);
-  W.s = -W.sol1.segment(n + p, m);
-  W.rhs2.setZero();
-  W.rhs2.head(n) = -W.c;
-  W.SolveKkt(W.rhs2, W.sol2, options_, options_.max_refinement_steps);
-  W.y = W.sol2.segment(n, p);
-  W.z = W.sol2.segment(n + p, m);
-  {
-    // Shift both into the cones so that every cone is at least 1 from its boundary (in the sense of
-    // its smallest eigenvalue): a cone that starts barely inside gives an extremely skewed scaling.
-    const double min_s = W.MinEigenvalue(W.s.data());
-    if (min_s < 1.0 && m > 0) W.AddIdentity(W.s.data(), 1.0 - min_s);
-    const double min_z = W.MinEigenvalue(W.z.data());
-    if (min_z < 1.0 && m > 0) W.AddIdentity(W.z.data(), 1.0 - min_z);
+  // ---- initial point: the centered point of the embedding ----
+  // x = 0, y = 0, s = z = e (the identity of each cone), tau = kappa = 1: every complementarity
+  // product equals mu = 1, so no cone starts off the central path. (A least-squares start, shifted
+  // into the cones, put single rows at s_i z_i ~ 1e-3 mu on long path problems; the first
+  // iterations then took steps below 0.01: 30 instead of 24 iterations at 20,000 cells.)
+  W.x.setZero();
+  W.y.setZero();
+  W.s.setZero();
+  W.z.setZero();
+  if (m > 0) {
+    W.AddIdentity(W.s.data(), 1.0);
+    W.AddIdentity(W.z.data(), 1.0);
   }
   W.tau = 1.0;
   W.kappa = 1.0;
