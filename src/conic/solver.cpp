@@ -1642,6 +1642,14 @@ Result Solver::Solve(const Problem& problem) {
         progress_mu = std::min(progress_mu, mu);
         progress_iteration = iteration;
       }
+      // Near the optimum a jump of the merit by 1000x is rounding taking over (the KKT solves lose the
+      // last digits as the scaling degenerates), not a phase that recovers: stop at once and return
+      // the best iterate instead of wandering until the stall window closes.
+      if (best_reduced_ok && merit > 1e3 * best_merit) {
+        status = Status::kNumericalError;
+        message = "the merit rose 1000-fold from the best iterate (rounding near the optimum)";
+        break;
+      }
       // Near the optimum (the best iterate meets the reduced tolerances) a short stall ends the
       // iteration; elsewhere slow phases are normal, so the window is four times longer.
       const int window = best_reduced_ok ? options_.stall_iterations : 4 * options_.stall_iterations;
