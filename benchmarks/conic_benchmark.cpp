@@ -17,32 +17,39 @@
 // Run: build/conic_benchmark --benchmark_counters_tabular=true --benchmark_repetitions=3
 //      --benchmark_report_aggregates_only=true
 //
-// Measured 2026-11-22 06:08 UTC (Release -O3, 2-core 2.6 GHz EPYC VM, single thread; CPU-time medians
-// of the solving thread over 3 repetitions). Automatic KKT method = reduced banded on these problems
-// (z eliminated, RCM-ordered skyline LDL', the big cone as two border rows); "augmented" forces the
-// AMD-ordered sparse LDL' of the full system (BM_TemporalAugmented).
+// Measured 2026-11-30 (Release -O3, 2-core VM, single thread; CPU-time medians of the solving thread
+// over 3 repetitions). Automatic KKT method = reduced banded on these problems (z eliminated,
+// RCM-ordered skyline LDL', the big cone as two border rows); "augmented" forces the AMD-ordered
+// sparse LDL' of the full system (BM_TemporalAugmented). Start: the centered point x = 0, s = z = e.
 //
 //   temporal  N cells   n vars  reduced: KKT rows  profile   its  ms/its  median ms | augmented: its  median ms
-//              250       1,003            1,259     6,275     20   0.28       5.5   |            20        5.2
-//              500       2,003            2,509    12,525     20   0.56      11.2   |            20       10.5
-//            1,250       5,003            6,259    31,275     23   1.48      33.9   |            23       31.7
-//            2,500      10,003           12,509    62,525     25   3.24      81     |            35 (r)  104
-//            6,250      25,003           31,259   156,275     26   8.92     232     |            33 (r)  315
-//           12,500      50,003           62,509   312,525     26  19.1      496     |            43 (r)  844
-//           25,000     100,003          125,009   625,025     28  41.5     1162     |            41 (r) 1717
-//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.16 (augmented: 1.30)
+//              250       1,003            1,259     6,275     18   0.35       6.3   |            18        7.0
+//              500       2,003            2,509    12,525     22   0.81      17.9   |            22       14.6
+//            1,250       5,003            6,259    31,275     24   1.93      46.3   |            24       43.7
+//            2,500      10,003           12,509    62,525     22   4.10      90     |            35 (r)  143
+//            6,250      25,003           31,259   156,275     24  11.6      279     |            33 (r)  388
+//           12,500      50,003           62,509   312,525     22  24.2      533     |            28 (r)  731
+//           25,000     100,003          125,009   625,025     23  54.6     1257     |            45 (r) 2483
+//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.11 (augmented: 1.29)
 //   (r) = kOptimal with Result::reduced_accuracy; the reduced method reaches full accuracy at every size.
+//   The iteration count is now flat (18-24); with the earlier least-squares start it grew from 20 to
+//   28 (slope 1.16): single rows started at 1e-3 mu and the first iterations stalled. This machine
+//   was ~15% slower per iteration than the one of the 2026-11-22 table (0.35 vs 0.28 ms/its at
+//   N = 250 for the same code path).
 //
 //   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy   (augmented: G is wide)
-//            1,000      3,750     30,524    12     0.65       7.8    full
-//            3,000     11,250     92,813    16     2.21      35.4    full
-//           10,000     37,500    320,225    17     8.67     147      reduced
-//           30,000    112,500    982,367    24    28.1      675      full
-//          100,000    375,000  3,459,993    35    98.6     3449      full
-//   log-log slope: 1.30
+//            1,000      3,750     30,524    12     0.75       9.0    full
+//            3,000     11,250     92,813    18     2.38      42.9    full
+//           10,000     37,500    320,225    17     9.32     158      reduced
+//           30,000    112,500    982,367    22    30.9      680      reduced
+//          100,000    375,000  3,459,993    33   110       3619      reduced
+//   log-log slope: 1.33. "reduced": the last iteration's LDL' of the augmented system breaks down
+//   (hundreds of pivots replaced, non-finite direction) at a relative gap of ~1.5e-8, and the best
+//   iterate is returned with Result::reduced_accuracy. With the least-squares start this happened
+//   at 10,000 only (30,000 and 100,000 took 2 more iterations and reached 1e-8).
 //
 // The targets (about 5,000 variables: <= 25 iterations and <= 2 ms; slope <= 1.1) are NOT
-// met: at N = 1,250 (5,003 variables) 23 iterations take 34 ms; slope 1.16.
+// met: at N = 1,250 (5,003 variables) 24 iterations take 46 ms; slope 1.11.
 //
 // Where the time goes (timers inside Solve on the real temporal problem at m=10, K=50: n 1,498,
 // m 5,166 cone rows of which 2,169 orthant and 999 rotated 3-cones, nnz(G) 6,328, profile 3,987;
