@@ -155,10 +155,12 @@ inline void ApplyHCone(const double* w, double eta, const double* v, double* o, 
   for (int i = 1; i < d; ++i) o[i] = e2 * (v[i] + sign * t2 * w[i]);
 }
 
-// Nesterov-Todd scaling point wbar (w0^2 - ||w1||^2 = 1) and factor eta of one cone; false if s or z
-// is not strictly inside.
+// Nesterov-Todd scaling point wbar (w0^2 - ||w1||^2 = 1) and factor eta of one cone, the scaled point
+// lambda = W z and its step data (see InverseStepCone): lbar = lambda / sqrt(det lambda),
+// isd = 1 / sqrt(det lambda), ilb = 1 / (lbar0 + 1). False if s, z or lambda is not strictly inside.
 template <int D>
-inline bool NtScalingCone(const double* sv, const double* zv, double* w, double& eta, int dim) {
+inline bool NtScalingCone(const double* sv, const double* zv, double* w, double& eta, double* lam, double* lbar,
+                          double& isd, double& ilb, int dim) {
   const int d = D > 0 ? D : dim;
   double s1 = 0.0, z1 = 0.0, sz = 0.0;
   for (int i = 1; i < d; ++i) {
@@ -175,52 +177,49 @@ inline bool NtScalingCone(const double* sv, const double* zv, double* w, double&
   const double dot = (sv[0] * zv[0] + sz) / (sn * zn);  // sbar'zbar >= 1
   const double gamma = std::sqrt(0.5 * (1.0 + dot));
   const double f = 0.5 / gamma;
-  w[0] = f * (sv[0] / sn + zv[0] / zn);
   double w1 = 0.0;
   for (int i = 1; i < d; ++i) {
+    // Divisions, not products with 1 / sn: the last digits of w decide whether the final
+    // iterations of borderline problems reach 1e-8 (measured on the known-optimum tests).
     w[i] = f * (sv[i] / sn - zv[i] / zn);
     w1 += w[i] * w[i];
   }
-  // Restore w0^2 - ||w1||^2 = 1 against rounding.
+  // w0 = f (sbar0 + zbar0), restored to w0^2 - ||w1||^2 = 1 against rounding.
   w[0] = std::sqrt(1.0 + w1);
   eta = std::sqrt(sn / zn);
+  // lambda = W z with the W just computed, and its step data from lambda itself: the closed form of
+  // lbar (gamma, ...) is exact, but steps computed from it instead of from W z ended in a stalled
+  // dual residual near the optimum (measured on the known-optimum tests).
+  ApplyWCone<D>(w, eta, zv, lam, dim);
+  double l1 = 0.0;
+  for (int i = 1; i < d; ++i) l1 += lam[i] * lam[i];
+  l1 = std::sqrt(l1);
+  const double det = (lam[0] - l1) * (lam[0] + l1);
+  if (!(lam[0] - l1 > 0.0 && det > 0.0)) return false;
+  isd = 1.0 / std::sqrt(det);
+  for (int i = 0; i < d; ++i) lbar[i] = lam[i] * isd;
+  ilb = 1.0 / (lbar[0] + 1.0);
   return true;
 }
 
-// Largest step a with u + a d in the cone (u strictly inside): infinity if unbounded, 0 if u is not
-// strictly inside.
+// The inverse of the largest step a with lam + a d in the cone, for lam strictly inside, from
+// lbar = lam / sqrt(det lam), isd = 1 / sqrt(det lam) and ilb = 1 / (lbar0 + 1): the hyperbolic
+// rotation that maps lbar to e maps d to rho = (lbar0 d0 - lbar1'd1, d1 - f lbar1) isd with
+// f = (lbar0 d0 - lbar1'd1 + d0) ilb, and lam + a d stays inside iff a (||rho1|| - rho0) < 1. Returns
+// ||rho1|| - rho0 (<= 0: no limit); one square root, no division.
 template <int D>
-inline double MaxStepCone(const double* uv, const double* dv, int dim) {
+inline double InverseStepCone(const double* lbar, double isd, double ilb, const double* dv, int dim) {
   const int d = D > 0 ? D : dim;
-  double u1 = 0.0, d1 = 0.0, ud = 0.0;
+  double l1d1 = 0.0;
+  for (int i = 1; i < d; ++i) l1d1 += lbar[i] * dv[i];
+  const double ld = lbar[0] * dv[0] - l1d1;
+  const double f = (ld + dv[0]) * ilb;
+  double r1 = 0.0;
   for (int i = 1; i < d; ++i) {
-    u1 += uv[i] * uv[i];
-    d1 += dv[i] * dv[i];
-    ud += uv[i] * dv[i];
+    const double r = dv[i] - f * lbar[i];
+    r1 += r * r;
   }
-  // f(a) = qa a^2 + 2 qb a + qc is the cone's determinant along the ray; the step ends at its
-  // smallest positive root (f > 0 on [0, root) keeps u + a d inside the cone).
-  const double qa = dv[0] * dv[0] - d1;
-  const double qb = uv[0] * dv[0] - ud;
-  const double un = std::sqrt(u1);
-  const double qc = (uv[0] - un) * (uv[0] + un);
-  if (!(qc > 0.0)) return 0.0;
-  double root = std::numeric_limits<double>::infinity();
-  if (qa == 0.0) {
-    if (qb < 0.0) root = -qc / (2.0 * qb);
-  } else {
-    const double disc = qb * qb - qa * qc;
-    if (disc >= 0.0) {
-      const double q = -(qb + std::copysign(std::sqrt(disc), qb));
-      const double r1 = q / qa;
-      const double r2 = q != 0.0 ? qc / q : std::numeric_limits<double>::infinity();
-      if (r1 > 0.0) root = std::min(root, r1);
-      if (r2 > 0.0) root = std::min(root, r2);
-    }
-  }
-  // Guard: the first coordinate must also stay positive.
-  if (dv[0] < 0.0) root = std::min(root, -uv[0] / dv[0]);
-  return root;
+  return (std::sqrt(r1) - ld) * isd;
 }
 
 // Reverse Cuthill-McKee order of an undirected graph in adjacency-list (CSR) form: order[k] is the
@@ -340,6 +339,10 @@ struct Solver::Workspace {
   Eigen::VectorXd wbar;                    // SOC scaling vectors (rows of socs)
   std::vector<double> eta;                 // SOC scaling factors
   Eigen::VectorXd lambda;                  // scaled point W z
+  // Step data of lambda, once per iteration: orthant rows 1 / lambda_i, cone rows lambda / sqrt(det);
+  // per cone 1 / sqrt(det lambda) and 1 / (lbar0 + 1) (see InverseStepCone).
+  Eigen::VectorXd lambda_step;
+  std::vector<double> lambda_isd, lambda_ilb;
   Eigen::VectorXd rhs1, sol1, rhs2, sol2;  // unpermuted KKT vectors of size num_kkt
   Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
   Eigen::VectorXd dx, dy, dz, ds, ds_aff, dz_aff, dtmp1, dtmp2, dtmp3, ldiv;
@@ -576,12 +579,14 @@ void Solver::Workspace::Analyze(const Problem& problem, int min_dim, KktMethod m
   // ---- work memory ----
   for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
   for (Eigen::VectorXd* v : {&y, &ry, &Ax, &dy, &best_y}) v->setZero(p);
-  for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &w_orthant, &h_orthant, &hinv_orthant, &wbar, &lambda, &dz, &ds, &ds_aff, &dz_aff,
+  for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &w_orthant, &h_orthant, &hinv_orthant, &wbar, &lambda, &lambda_step, &dz, &ds, &ds_aff, &dz_aff,
                              &dtmp1, &dtmp2, &dtmp3, &ldiv, &best_z, &best_s}) {
     v->setZero(m);
   }
   for (Eigen::VectorXd* v : {&rhs1, &sol1, &rhs2, &sol2, &full_res, &full_corr}) v->setZero(num_kkt);
   eta.assign(socs.size(), 1.0);
+  lambda_isd.assign(socs.size(), 1.0);
+  lambda_ilb.assign(socs.size(), 0.5);
   {
     int largest = 0;
     for (const SocBlock& blk : socs) largest = std::max(largest, blk.dim);
@@ -957,29 +962,28 @@ bool Solver::Workspace::ComputeScaling() {
     const auto so = s.head(num_orthant).array();
     const auto zo = z.head(num_orthant).array();
     if (!(so.minCoeff() > 0.0 && zo.minCoeff() > 0.0)) return false;  // also catches NaN
-    h_orthant.head(num_orthant).array() = so / zo;
-    hinv_orthant.head(num_orthant).array() = zo / so;
-    w_orthant.head(num_orthant).array() = h_orthant.head(num_orthant).array().sqrt();
-    lambda.head(num_orthant).array() = (so * zo).sqrt();  // w z = sqrt(s z)
+    // One division and one root per row: with r = 1 / (s z), lambda = sqrt(s z) (= w z),
+    // 1 / lambda = lambda r, w = sqrt(s / z) = s / lambda, s / z = s^2 r and z / s = z^2 r.
+    auto lo = lambda.head(num_orthant).array();
+    auto li = lambda_step.head(num_orthant).array();
+    auto r = dtmp1.head(num_orthant).array();  // scratch
+    r = (so * zo).inverse();
+    lo = (so * zo).sqrt();
+    li = lo * r;
+    w_orthant.head(num_orthant).array() = so * li;
+    h_orthant.head(num_orthant).array() = so.square() * r;
+    hinv_orthant.head(num_orthant).array() = zo.square() * r;
   }
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
-    const double* sv = s.data() + blk.start;
-    const double* zv = z.data() + blk.start;
-    double* w = wbar.data() + blk.start;
-    const bool ok = blk.dim == 3 ? NtScalingCone<3>(sv, zv, w, eta[k], 3)
-                                 : NtScalingCone<0>(sv, zv, w, eta[k], blk.dim);
+    const int o = blk.start;
+    const bool ok =
+        blk.dim == 3
+            ? NtScalingCone<3>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
+                               lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], 3)
+            : NtScalingCone<0>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
+                               lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], blk.dim);
     if (!ok) return false;
-  }
-  // lambda = W z for the cones.
-  for (std::size_t k = 0; k < socs.size(); ++k) {
-    const SocBlock& blk = socs[k];
-    const double* w = wbar.data() + blk.start;
-    if (blk.dim == 3) {
-      ApplyWCone<3>(w, eta[k], z.data() + blk.start, lambda.data() + blk.start, 3);
-    } else {
-      ApplyWCone<0>(w, eta[k], z.data() + blk.start, lambda.data() + blk.start, blk.dim);
-    }
   }
   return true;
 }
@@ -1059,7 +1063,7 @@ void Solver::Workspace::ComplementarityRhs(bool corrector, double sigma_mu, doub
   for (int i = 0; i < num_orthant; ++i) {
     double d = l[i] * l[i];
     if (corrector) d += a[i] * b[i] - sigma_mu;
-    ld[i] = d / l[i];
+    ld[i] = d * lambda_step[i];
     t2[i] = w_orthant[i] * ld[i];
     rhs_z[i] = -eta_r * r[i] + t2[i];
   }
@@ -1101,7 +1105,6 @@ void Solver::Workspace::ComplementarityRhs(bool corrector, double sigma_mu, doub
 }
 
 double Solver::Workspace::CompleteDirection() {
-  const double* l = lambda.data();
   const double* dzv = dz.data();
   const double* ld = ldiv.data();
   const double* t2 = dtmp2.data();
@@ -1114,20 +1117,20 @@ double Solver::Workspace::CompleteDirection() {
     dsv[i] = -t2[i] - w * dza[i];
     dsa[i] = -ld[i] - dza[i];
   }
-  double alpha = std::numeric_limits<double>::infinity();
+  // The largest inverse step over all rows and cones (no divisions: 1 / lambda is precomputed).
+  double worst = 0.0;
   if (num_orthant > 0) {
-    const auto lo = Eigen::Map<const Eigen::ArrayXd>(l, num_orthant);
-    const double worst = std::max((-Eigen::Map<const Eigen::ArrayXd>(dsa, num_orthant) / lo).maxCoeff(),
-                                  (-Eigen::Map<const Eigen::ArrayXd>(dza, num_orthant) / lo).maxCoeff());
-    if (worst > 0.0) alpha = 1.0 / worst;
+    const auto li = lambda_step.head(num_orthant).array();
+    worst = std::max((-Eigen::Map<const Eigen::ArrayXd>(dsa, num_orthant) * li).maxCoeff(),
+                     (-Eigen::Map<const Eigen::ArrayXd>(dza, num_orthant) * li).maxCoeff());
   }
   double tmp[64];
   std::vector<double>& big = local_cone;
+  const double* lbar = lambda_step.data();
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
     const int o = blk.start;
     const double* w = wbar.data() + o;
-    double root_s, root_z;
     if (blk.dim == 3) {
       ApplyWCone<3>(w, eta[k], dzv + o, dza + o, 3);
       ApplyWCone<3>(w, eta[k], dza + o, tmp, 3);
@@ -1135,8 +1138,8 @@ double Solver::Workspace::CompleteDirection() {
         dsv[o + i] = -t2[o + i] - tmp[i];
         dsa[o + i] = -ld[o + i] - dza[o + i];
       }
-      root_s = MaxStepCone<3>(l + o, dsa + o, 3);
-      root_z = MaxStepCone<3>(l + o, dza + o, 3);
+      worst = std::max(worst, std::max(InverseStepCone<3>(lbar + o, lambda_isd[k], lambda_ilb[k], dsa + o, 3),
+                                       InverseStepCone<3>(lbar + o, lambda_isd[k], lambda_ilb[k], dza + o, 3)));
     } else {
       const int dim = blk.dim;
       double* tv = dim <= 64 ? tmp : big.data();
@@ -1146,13 +1149,12 @@ double Solver::Workspace::CompleteDirection() {
         dsv[o + i] = -t2[o + i] - tv[i];
         dsa[o + i] = -ld[o + i] - dza[o + i];
       }
-      root_s = MaxStepCone<0>(l + o, dsa + o, dim);
-      root_z = MaxStepCone<0>(l + o, dza + o, dim);
+      worst = std::max(worst, std::max(InverseStepCone<0>(lbar + o, lambda_isd[k], lambda_ilb[k], dsa + o, dim),
+                                       InverseStepCone<0>(lbar + o, lambda_isd[k], lambda_ilb[k], dza + o, dim)));
     }
-    if (root_s == 0.0 || root_z == 0.0) return 0.0;
-    alpha = std::min(alpha, std::min(root_s, root_z));
   }
-  return alpha;
+  if (!(worst == worst)) return 0.0;  // NaN: no step
+  return worst > 0.0 ? 1.0 / worst : std::numeric_limits<double>::infinity();
 }
 
 bool Solver::Workspace::TrialPoint(double step) {
