@@ -76,6 +76,9 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (max_refinement_steps < 0) return fail("max_refinement_steps must be >= 0");
   if (max_affine_refinement_steps < 0) return fail("max_affine_refinement_steps must be >= 0");
   if (!(refinement_tolerance >= 0.0)) return fail("refinement_tolerance must be >= 0");
+  if (!(refinement_mu_factor >= 0.0 && std::isfinite(refinement_mu_factor))) {
+    return fail("refinement_mu_factor must be >= 0 and finite");
+  }
   if (!(refinement_stagnation > 0.0 && refinement_stagnation <= 1.0)) {
     return fail("refinement_stagnation must be in (0, 1]");
   }
@@ -351,6 +354,7 @@ struct Solver::Workspace {
   double best_tau = 1.0, best_kappa = 1.0;
 
   int refinement_counter = 0;
+  double refinement_floor = 0.0;  // refinement_mu_factor * mu of the current iteration
 
   // ---------------- reduced (normal-equation) KKT path ----------------
   // Unknowns of the reduced system, unpermuted: x_j -> j, y_i -> n + i, and per expanded cone q two
@@ -1340,7 +1344,7 @@ template <typename Multiply, typename Correct>
 bool Solver::Workspace::Refine(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, Eigen::VectorXd& res,
                                Eigen::VectorXd& cand, int len, const Options& options, int max_steps,
                                Multiply multiply, Correct correct) {
-  const double bound = options.refinement_tolerance * (1.0 + NormInf(rhs.data(), len));
+  const double bound = std::max(options.refinement_tolerance, refinement_floor) * (1.0 + NormInf(rhs.data(), len));
   multiply(sol, res);
   res.head(len) = rhs.head(len) - res.head(len);
   double norm = NormInf(res.data(), len);
@@ -1701,6 +1705,7 @@ Result Solver::Solve(const Problem& problem) {
       break;
     }
     dynamic_regs += W.FactorKkt(options_);
+    W.refinement_floor = options_.refinement_mu_factor * mu;
     const int refinements_before = W.refinement_counter;
 
     // sol1 = K^{-1} [-c; b; h] (unrefined: only the combined direction below is refined, one refined

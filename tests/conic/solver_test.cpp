@@ -564,6 +564,10 @@ TEST(BadInputTest, InvalidOptions) {
   options = Solver::Options();
   options.feasibility_tolerance = -1.0;
   EXPECT_FALSE(options.IsValid(nullptr));
+  options = Solver::Options();
+  options.refinement_mu_factor = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_THAT(error, HasSubstr("refinement_mu_factor"));
 }
 
 TEST(StatusTest, NamesAndReport) {
