@@ -20,36 +20,36 @@
 // Measured 2026-11-30 (Release -O3, 2-core VM, single thread; CPU-time medians of the solving thread
 // over 3 repetitions). Automatic KKT method = reduced banded on these problems (z eliminated,
 // RCM-ordered skyline LDL', the big cone as two border rows); "augmented" forces the AMD-ordered
-// sparse LDL' of the full system (BM_TemporalAugmented). Start: the centered point x = 0, s = z = e.
+// sparse LDL' of the full system (BM_TemporalAugmented). Start: the centered point x = 0, s = z = e;
+// refinement to max(1e-12, 1e-4 mu) (SolverOptions::refinement_mu_factor).
 //
 //   temporal  N cells   n vars  reduced: KKT rows  profile   its  ms/its  median ms | augmented: its  median ms
-//              250       1,003            1,259     6,275     18   0.35       6.3   |            18        7.0
-//              500       2,003            2,509    12,525     22   0.81      17.9   |            22       14.6
-//            1,250       5,003            6,259    31,275     24   1.93      46.3   |            24       43.7
-//            2,500      10,003           12,509    62,525     22   4.10      90     |            35 (r)  143
-//            6,250      25,003           31,259   156,275     24  11.6      279     |            33 (r)  388
-//           12,500      50,003           62,509   312,525     22  24.2      533     |            28 (r)  731
-//           25,000     100,003          125,009   625,025     23  54.6     1257     |            45 (r) 2483
-//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.11 (augmented: 1.29)
+//              250       1,003            1,259     6,275     18   0.30       5.3   |            18        4.7
+//              500       2,003            2,509    12,525     22   0.59      13.0   |            22       11.5
+//            1,250       5,003            6,259    31,275     24   1.52      36.4   |            24       35.2
+//            2,500      10,003           12,509    62,525     23   3.45      79     |            31 (r)  105
+//            6,250      25,003           31,259   156,275     24   9.45     227     |            31 (r)  306
+//           12,500      50,003           62,509   312,525     22  19.9      437     |            27 (r)  559
+//           25,000     100,003          125,009   625,025     23  41.6      956     |            39 (r) 1828
+//   log-log slope of median time against n (1,003 .. 100,003 variables): 1.12 (augmented: 1.28);
+//   run-to-run noise on this VM moves it by +-0.02.
 //   (r) = kOptimal with Result::reduced_accuracy; the reduced method reaches full accuracy at every size.
-//   The iteration count is now flat (18-24); with the earlier least-squares start it grew from 20 to
-//   28 (slope 1.16): single rows started at 1e-3 mu and the first iterations stalled. This machine
-//   was ~15% slower per iteration than the one of the 2026-11-22 table (0.35 vs 0.28 ms/its at
-//   N = 250 for the same code path).
+//   The iteration count is flat (18-24); with the earlier least-squares start it grew from 20 to 28
+//   (slope 1.16): single rows started at 1e-3 mu and the first iterations stalled.
 //
 //   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy   (augmented: G is wide)
-//            1,000      3,750     30,524    12     0.75       9.0    full
-//            3,000     11,250     92,813    18     2.38      42.9    full
-//           10,000     37,500    320,225    17     9.32     158      reduced
-//           30,000    112,500    982,367    22    30.9      680      reduced
-//          100,000    375,000  3,459,993    33   110       3619      reduced
-//   log-log slope: 1.33. "reduced": the last iteration's LDL' of the augmented system breaks down
+//            1,000      3,750     30,524    12     0.62       7.4    full
+//            3,000     11,250     92,813    18     1.93      34.6    full
+//           10,000     37,500    320,225    18     7.69     138      reduced
+//           30,000    112,500    982,367    22    23.9      525      reduced
+//          100,000    375,000  3,459,993    34    85.1     2894      reduced
+//   log-log slope: 1.28. "reduced": the last iteration's LDL' of the augmented system breaks down
 //   (hundreds of pivots replaced, non-finite direction) at a relative gap of ~1.5e-8, and the best
 //   iterate is returned with Result::reduced_accuracy. With the least-squares start this happened
 //   at 10,000 only (30,000 and 100,000 took 2 more iterations and reached 1e-8).
 //
 // The targets (about 5,000 variables: <= 25 iterations and <= 2 ms; slope <= 1.1) are NOT
-// met: at N = 1,250 (5,003 variables) 24 iterations take 46 ms; slope 1.11.
+// met: at N = 1,250 (5,003 variables) 24 iterations take 36 ms; slope 1.12.
 //
 // Where the time goes (timers inside Solve on the real temporal problem at m=10, K=50: n 1,498,
 // m 5,166 cone rows of which 2,169 orthant and 999 rotated 3-cones, nnz(G) 6,328, profile 3,987;
