@@ -414,6 +414,17 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   }
 
   // ---- grid values ----
+  // A new variable of piece i is x = b / S_i with S_i = vref^2 / T_i^2, T_i the piece's largest
+  // tangent length on the grid and vref the largest velocity limit: x is then about the squared
+  // speed relative to the limit. Unscaled b spans 1 to 1e4 on curves with short, slow pieces (a time
+  // allocation's last piece), and the conic solver stalled on such problems.
+  const double vref = limits.max_velocity.maxCoeff();
+  std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
+  for (int i = 0; i < m; ++i) {
+    double t_max = 0.0;
+    for (int k = 0; k <= K; ++k) t_max = std::max(t_max, curve.Evaluate(i, k * ds, 1).norm());
+    if (t_max > problem.zero_tangent_tolerance) piece_scale[static_cast<size_t>(i)] = vref * vref / (t_max * t_max);
+  }
   int next_var = 0;
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k <= K; ++k) {
@@ -440,7 +451,11 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
         g = GridValue{};  // fixed 0: the vehicle stops at the kink
       } else {
         g.var = next_var++;
-        g.scale = 1.0;
+        g.scale = piece_scale[static_cast<size_t>(i)];
+      }
+      // A free boundary value (vanishing tangent there) gets its piece's scale too.
+      if ((i == 0 && k == 0) || (i == m - 1 && k == K)) {
+        if (g.var >= 0) g.scale = piece_scale[static_cast<size_t>(i)];
       }
     }
   }

