@@ -1651,7 +1651,8 @@ Result Solver::Solve(const Problem& problem) {
       // Near the optimum a jump of the merit by 1000x is rounding taking over (the KKT solves lose the
       // last digits as the scaling degenerates), not a phase that recovers: stop at once and return
       // the best iterate instead of wandering until the stall window closes.
-      if (best_reduced_ok && merit > 1e3 * best_merit) {
+      constexpr double kDivergence = 1e3;  // merit factor; the breakdowns seen rose ~1e4-fold at once
+      if (best_reduced_ok && merit > kDivergence * best_merit) {
         status = Status::kNumericalError;
         message = "the merit rose 1000-fold from the best iterate (rounding near the optimum)";
         break;

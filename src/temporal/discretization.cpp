@@ -308,9 +308,9 @@ void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   r = std::move(out);
 }
 
-// Boundary grid value from a given velocity and the tangent there.
+// Boundary grid value from a given velocity and the tangent there; a free value gets `scale`.
 GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
-                        const TemporalProblem& p, const std::string& field, int* next_var) {
+                        const TemporalProblem& p, const std::string& field, double scale, int* next_var) {
   GridValue g;
   const double tn = tangent.norm();
   const double vn = velocity.norm();
@@ -320,6 +320,7 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
                                           "velocity is possible");
     }
     g.var = (*next_var)++;  // v = f' sqrt(b) = 0 for any b: b is free
+    g.scale = scale;
     return g;
   }
   if (vn == 0.0) {
@@ -431,10 +432,10 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, k))];
       if (i == 0 && k == 0) {
         g = BoundaryValue(problem.boundary.start_velocity, curve.Evaluate(0, 0.0, 1), problem,
-                          "boundary.start_velocity", &next_var);
+                          "boundary.start_velocity", piece_scale.front(), &next_var);
       } else if (i == m - 1 && k == K) {
         g = BoundaryValue(problem.boundary.end_velocity, curve.Evaluate(m - 1, 1.0, 1), problem,
-                          "boundary.end_velocity", &next_var);
+                          "boundary.end_velocity", piece_scale.back(), &next_var);
       } else if (k == 0) {
         const JointInfo& j = d.joints[static_cast<size_t>(i - 1)];
         const GridValue& prev = d.grid[static_cast<size_t>(d.GridIndex(i - 1, K))];
@@ -452,10 +453,6 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       } else {
         g.var = next_var++;
         g.scale = piece_scale[static_cast<size_t>(i)];
-      }
-      // A free boundary value (vanishing tangent there) gets its piece's scale too.
-      if ((i == 0 && k == 0) || (i == m - 1 && k == K)) {
-        if (g.var >= 0) g.scale = piece_scale[static_cast<size_t>(i)];
       }
     }
   }
