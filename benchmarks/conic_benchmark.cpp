@@ -78,6 +78,7 @@
 
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
+#include "../tests/common/random_socp.h"
 
 namespace {
 
@@ -165,56 +166,6 @@ Problem TemporalProblem(int N, unsigned seed) {
   for (int k = 0; k < N; ++k) big.push_back(AffineExpr{{{a + k, 1.0}}, 0.0});
   builder.AddRotatedCone(big);
   return builder.Build();
-}
-
-// A random sparse SOCP with n variables, strictly feasible primal and dual (so it has an optimum):
-// n/4 equalities with 3 non-zeros each, n orthant rows and n/2 three-dimensional cones (3n/2 rows)
-// with 2-3 non-zeros per row. Column indices are drawn near the row's position along the variables
-// (a window of 30), as in problems discretized along a path; purely random patterns have fill that
-// grows faster than linearly under any ordering.
-Problem RandomSocp(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::uniform_int_distribution<int> window(-15, 15);
-  auto near = [&](int center) { return std::min(n - 1, std::max(0, center + window(rng))); };
-  const int p = n / 4, num_lin = n, num_soc = n / 2, m = num_lin + 3 * num_soc;
-  std::vector<Eigen::Triplet<double>> ta, tg;
-  for (int i = 0; i < p; ++i) {
-    const int center = static_cast<int>(static_cast<long long>(i) * n / p);
-    for (int q = 0; q < 3; ++q) ta.emplace_back(i, near(center), uni(rng));
-  }
-  for (int i = 0; i < m; ++i) {
-    const int center = static_cast<int>(static_cast<long long>(i) * n / m);
-    const int nz = 2 + static_cast<int>(rng() % 2);
-    for (int q = 0; q < nz; ++q) tg.emplace_back(i, near(center), uni(rng));
-  }
-  Problem problem;
-  problem.A.resize(p, n);
-  problem.A.setFromTriplets(ta.begin(), ta.end());
-  problem.G.resize(m, n);
-  problem.G.setFromTriplets(tg.begin(), tg.end());
-  problem.cones.num_nonnegative = num_lin;
-  problem.cones.soc_dims.assign(num_soc, 3);
-  // Interior points s0, z0 of K, a point x0 and duals y0: h = G x0 + s0, b = A x0, c = -A'y0 - G'z0.
-  Eigen::VectorXd x0 = Eigen::VectorXd::NullaryExpr(n, [&] { return uni(rng); });
-  Eigen::VectorXd y0 = Eigen::VectorXd::NullaryExpr(p, [&] { return uni(rng); });
-  Eigen::VectorXd s0(m), z0(m);
-  for (int i = 0; i < num_lin; ++i) {
-    s0[i] = 1.0 + uni(rng);
-    z0[i] = 1.0 + uni(rng);
-  }
-  for (int k = 0; k < num_soc; ++k) {
-    const int r = num_lin + 3 * k;
-    for (Eigen::VectorXd* v : {&s0, &z0}) {
-      (*v)[r + 1] = uni(rng);
-      (*v)[r + 2] = uni(rng);
-      (*v)[r] = std::hypot((*v)[r + 1], (*v)[r + 2]) + 0.5 + 0.5 * std::abs(uni(rng));
-    }
-  }
-  problem.h = problem.G * x0 + s0;
-  problem.b = problem.A * x0;
-  problem.c = -(problem.A.transpose() * y0) - problem.G.transpose() * z0;
-  return problem;
 }
 
 double ThreadCpuMs() {
@@ -318,7 +269,7 @@ void BM_TemporalAugmentedSlope(benchmark::State& state) { Slope(state, "temporal
 BENCHMARK(BM_TemporalAugmentedSlope)->Iterations(1);
 
 void BM_RandomSocp(benchmark::State& state) {
-  const Problem problem = RandomSocp(static_cast<int>(state.range(0)), 2);
+  const Problem problem = timeopt::test_support::RandomPathSocp(static_cast<int>(state.range(0)), 2);
   RunSolves(state, problem, "random");
 }
 BENCHMARK(BM_RandomSocp)->Arg(1000)->Arg(3000)->Arg(10000)->Arg(30000)->Arg(100000)

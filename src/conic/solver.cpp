@@ -355,6 +355,9 @@ struct Solver::Workspace {
 
   int refinement_counter = 0;
   double refinement_floor = 0.0;  // refinement_mu_factor * mu of the current iteration
+  // The static regularization in use: Options::static_regularization, raised 100-fold (for the rest
+  // of the solve) each time a factorization breaks down (see Solve).
+  double static_reg = 0.0;
 
   // ---------------- reduced (normal-equation) KKT path ----------------
   // Unknowns of the reduced system, unpermuted: x_j -> j, y_i -> n + i, and per expanded cone q two
@@ -418,7 +421,10 @@ struct Solver::Workspace {
   void UpdateKktScaling(double delta);
   int Factor(const Options& options);
   int FactorReduced(const Options& options);
-  void LoadReducedValues(const Options& options);
+  void LoadReducedValues();
+  // Sets static_reg and the KKT entries that depend on it (the scaled entries follow at the next
+  // FactorKkt).
+  void SetStaticRegularization(double delta);
   // Reduced path: sol = K^{-1} rhs (unrefined, unpermuted full vectors) for one or two right-hand sides.
   void SolveReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol);
   void SolveReduced2(const Eigen::VectorXd& rhs_a, Eigen::VectorXd& sol_a, const Eigen::VectorXd& rhs_b,
@@ -933,14 +939,20 @@ void Solver::Workspace::LoadValues(const Problem& problem, const Options& option
       if (g_target1[q] >= 0) G.val[g_target1[q]] += g_coef1[q] * it.value();
     }
   }
+  if (!reduced) {
+    for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
+    for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
+  }
+  SetStaticRegularization(options.static_regularization);
+}
+
+void Solver::Workspace::SetStaticRegularization(double delta) {
+  static_reg = delta;
   if (reduced) {
-    LoadReducedValues(options);
+    LoadReducedValues();
     return;
   }
   // Constant KKT entries.
-  const double delta = options.static_regularization;
-  for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
-  for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
   for (int j = 0; j < n; ++j) {
     k_val[diag_slot[j]] = delta;
     k_reg[pinv[j]] = delta;
@@ -1172,14 +1184,14 @@ bool Solver::Workspace::TrialPoint(double step) {
 
 int Solver::Workspace::FactorKkt(const Options& options) {
   if (reduced) return FactorReduced(options);
-  UpdateKktScaling(options.static_regularization);
+  UpdateKktScaling(static_reg);
   return Factor(options);
 }
 
 // The constant parts of the reduced matrix: +-delta on the diagonal, A, the border's +-1; and the
 // products of G's entries that the scaled terms multiply.
-void Solver::Workspace::LoadReducedValues(const Options& options) {
-  const double delta = options.static_regularization;
+void Solver::Workspace::LoadReducedValues() {
+  const double delta = static_reg;
   const int nxy = n + p;
   sky.SetZero();
   double* v = sky.values();
@@ -1525,6 +1537,7 @@ Result Solver::Solve(const Problem& problem) {
   const double norm_b = NormInf(W.b.data(), p);
   const double norm_h = NormInf(W.h.data(), m);
   int dynamic_regs = 0;
+  int regularization_boosts = 0;
 
   // ---- initial point: the centered point of the embedding ----
   // x = 0, y = 0, s = z = e (the identity of each cone), tau = kappa = 1: every complementarity
@@ -1705,7 +1718,6 @@ Result Solver::Solve(const Problem& problem) {
       message = "iterate left the cone interior at iteration " + std::to_string(iteration);
       break;
     }
-    dynamic_regs += W.FactorKkt(options_);
     W.refinement_floor = options_.refinement_mu_factor * mu;
     const int refinements_before = W.refinement_counter;
 
@@ -1725,7 +1737,20 @@ Result Solver::Solve(const Problem& problem) {
     };
     // The predictor's right-hand side: d_s = lambda o lambda.
     direction_rhs(false, 0.0, 1.0);
-    W.SolveKkt2(W.rhs1, W.sol1, W.rhs2, W.sol2);
+    // Near the optimum the scaling spans ~20 orders of magnitude and the LDL' of a large system can
+    // break down (pivots of the wrong sign replaced by the hundred, then overflow: seen on random
+    // SOCPs of 10,000+ variables, one iteration before the tolerances). The static regularization is
+    // then raised 100-fold, for the rest of the solve, and the factorization redone; refinement on
+    // the unregularized system recovers the accuracy.
+    constexpr int kMaxRegularizationBoosts = 3;
+    for (;;) {
+      dynamic_regs += W.FactorKkt(options_);
+      W.SolveKkt2(W.rhs1, W.sol1, W.rhs2, W.sol2);
+      if (std::isfinite(W.sol1.squaredNorm()) && std::isfinite(W.sol2.squaredNorm())) break;
+      if (regularization_boosts == kMaxRegularizationBoosts) break;  // reported below as non-finite
+      ++regularization_boosts;
+      W.SetStaticRegularization(100.0 * W.static_reg);
+    }
     const double denom = W.c.dot(W.sol1.head(n)) + W.b.dot(W.sol1.segment(n, p)) +
                          W.h.dot(W.sol1.segment(n + p, m)) - kappa / tau;
 
@@ -1842,6 +1867,7 @@ Result Solver::Solve(const Problem& problem) {
   result.iterations = iteration;
   result.num_refinement_steps = W.refinement_counter;
   result.num_dynamic_regularizations = dynamic_regs;
+  result.num_regularization_boosts = regularization_boosts;
   result.kkt_method = W.reduced ? KktMethod::kReducedBanded : KktMethod::kAugmentedSparse;
   if (W.reduced) {
     result.kkt_size = W.nr;

@@ -136,6 +136,9 @@ struct Result {
   double solve_time_seconds = 0.0; ///< Wall time of Solve(), including analysis.
   int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
   int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
+  /// Times the static regularization was raised 100-fold after a factorization broke down (the
+  /// direction came out non-finite); at most 3 per solve.
+  int num_regularization_boosts = 0;
   bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
   /// True if kOptimal was reached only with the reduced tolerances of SolverOptions (the iteration
   /// stalled near the optimum); residuals and gap tell the accuracy actually reached.
