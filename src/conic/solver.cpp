@@ -425,6 +425,9 @@ struct Solver::Workspace {
   // Sets static_reg and the KKT entries that depend on it (the scaled entries follow at the next
   // FactorKkt).
   void SetStaticRegularization(double delta);
+  // Leaves the reduced method for the augmented one in the middle of a solve (the data and the
+  // regularization in use are reloaded); the next Solve() analyzes the pattern afresh.
+  void SwitchToAugmented();
   // Reduced path: sol = K^{-1} rhs (unrefined, unpermuted full vectors) for one or two right-hand sides.
   void SolveReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol);
   void SolveReduced2(const Eigen::VectorXd& rhs_a, Eigen::VectorXd& sol_a, const Eigen::VectorXd& rhs_b,
@@ -944,6 +947,15 @@ void Solver::Workspace::LoadValues(const Problem& problem, const Options& option
     for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
   }
   SetStaticRegularization(options.static_regularization);
+}
+
+void Solver::Workspace::SwitchToAugmented() {
+  reduced = false;
+  AnalyzeAugmented();
+  for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
+  for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
+  SetStaticRegularization(static_reg);
+  analyzed = false;
 }
 
 void Solver::Workspace::SetStaticRegularization(double delta) {
@@ -1665,6 +1677,22 @@ Result Solver::Solve(const Problem& problem) {
       // last digits as the scaling degenerates), not a phase that recovers: stop at once and return
       // the best iterate instead of wandering until the stall window closes.
       constexpr double kDivergence = 1e3;  // merit factor; the breakdowns seen rose ~1e4-fold at once
+      if (best_reduced_ok && merit > kDivergence * best_merit && W.reduced) {
+        // The reduced method forms G'W^{-2}G, whose rounding can spoil the direction when the scaling
+        // is extreme (seen on small random SOCPs: the dual residual jumped from 2e-7 to 4e-2 and no
+        // refinement recovered it). The augmented system does not form it: back to the best iterate,
+        // and on with that method.
+        W.SwitchToAugmented();
+        W.x = W.best_x;
+        W.y = W.best_y;
+        W.z = W.best_z;
+        W.s = W.best_s;
+        W.tau = W.best_tau;
+        W.kappa = W.best_kappa;
+        progress_merit = best_merit;
+        progress_iteration = iteration;
+        continue;
+      }
       if (best_reduced_ok && merit > kDivergence * best_merit) {
         status = Status::kNumericalError;
         message = "the merit rose 1000-fold from the best iterate (rounding near the optimum)";

@@ -685,8 +685,10 @@ TEST(RandomProblemTest, OptimalityCertifiedByTheReturnedVectors) {
     EXPECT_LE(r.iterations, 40) << seed;
   }
   // Known weakness: a few of these end one step short of the 1e-8 tolerances (the last Newton
-  // directions lose accuracy) and are accepted with reduced accuracy. Currently 5 of 180.
-  EXPECT_LE(reduced, 12);
+  // directions lose accuracy) and are accepted with reduced accuracy. Currently 3 of 180, all with the
+  // augmented method forced (it was 5 before the reduced method learnt to hand over to the augmented
+  // one when its direction is spoiled; seed 15 ended at a gap of 3e-6 that way).
+  EXPECT_LE(reduced, 6);
   // The reduced method is defined on the problems whose G has at least as many rows as columns (48 of
   // the 180 solves with these seeds, by both the automatic choice and forcing): the check above must
   // really cover it.

@@ -149,7 +149,10 @@ struct Result {
   long long kkt_nonzeros = 0;      ///< Stored non-zeros of the factorized matrix's upper triangle.
   /// Non-zeros of the LDL' factor L (strictly lower part; for kReducedBanded its stored profile).
   long long factor_nonzeros = 0;
-  KktMethod kkt_method = KktMethod::kAutomatic;  ///< The method used (never kAutomatic after Solve()).
+  /// The method used at the end (never kAutomatic after Solve()). The reduced method hands over to
+  /// the augmented one, from the best iterate, if a direction near the optimum comes out spoiled by
+  /// the rounding of G'W^{-2}G (the merit jumps 1000-fold).
+  KktMethod kkt_method = KktMethod::kAutomatic;
 
   /// True iff status == kOptimal.
   bool is_success() const { return status == Status::kOptimal; }
