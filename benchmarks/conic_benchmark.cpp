@@ -38,15 +38,17 @@
 //   (slope 1.16): single rows started at 1e-3 mu and the first iterations stalled.
 //
 //   random    n vars  KKT rows  nnz(L)    IPM its  ms/its  median ms  accuracy   (augmented: G is wide)
-//            1,000      3,750     30,524    12     0.62       7.4    full
-//            3,000     11,250     92,813    18     1.93      34.6    full
-//           10,000     37,500    320,225    18     7.69     138      reduced
-//           30,000    112,500    982,367    22    23.9      525      reduced
-//          100,000    375,000  3,459,993    34    85.1     2894      reduced
-//   log-log slope: 1.28. "reduced": the last iteration's LDL' of the augmented system breaks down
-//   (hundreds of pivots replaced, non-finite direction) at a relative gap of ~1.5e-8, and the best
-//   iterate is returned with Result::reduced_accuracy. With the least-squares start this happened
-//   at 10,000 only (30,000 and 100,000 took 2 more iterations and reached 1e-8).
+//            1,000      3,750     30,524    12     0.61       7.3    full
+//            3,000     11,250     92,813    18     1.98      35.6    full
+//           10,000     37,500    320,225    19     7.79     148      full
+//           30,000    112,500    982,367    23    24.3      564      full
+//          100,000    375,000  3,459,993    38    88.6     3370      full
+//   log-log slope: 1.30 (re-measured 2026-12-01, after the regularization boost). Before it, 10,000
+//   and up ended one iteration short with Result::reduced_accuracy (relative gap ~1.5e-8): in the
+//   last iteration the augmented LDL' broke down (thousands of pivots replaced, then overflow and a
+//   non-finite direction). Now the factorization is redone with the static regularization raised
+//   100-fold (Result::num_regularization_boosts, once on each of these), and refinement on the
+//   unregularized system recovers the accuracy; 100,000 needs 38 iterations to get there.
 //
 // The targets (about 5,000 variables: <= 25 iterations and <= 2 ms; slope <= 1.1) are NOT
 // met: at N = 1,250 (5,003 variables) 24 iterations take 36 ms; slope 1.12.
