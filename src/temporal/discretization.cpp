@@ -509,6 +509,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   // (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
   // rows and by the acceleration-change rows in both modes.
   std::vector<Eigen::Matrix<double, 3, 2>> mid_acc(d.cells.size());
+  double cap_sum = 0.0;  // for acceleration_norm_scale
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
     const int k = c.first_grid - d.GridIndex(c.piece, 0);
@@ -517,7 +518,13 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
     const Eigen::Vector3d f2 = curve.Evaluate(c.piece, s_mid, 2);
     mid_acc[ci].col(0) = -f1 / (2.0 * ds) + f2 / 2.0;
     mid_acc[ci].col(1) = f1 / (2.0 * ds) + f2 / 2.0;
+    double cap = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      if (f1(a) != 0.0) cap = std::min(cap, limits.max_acceleration(a) / std::abs(f1(a)));
+    }
+    if (std::isfinite(cap)) cap_sum += cap * cap;
   }
+  if (cap_sum > 0.0 && std::isfinite(cap_sum)) d.acceleration_norm_scale = std::sqrt(cap_sum);
 
   // ---- per-cell rows over (b^k, b^{k+1}) ----
   // Every velocity and acceleration row of a cell involves only its two grid values, so after

@@ -124,7 +124,9 @@ TEST(RowPruning, KeepsTheFeasibleSetAndTheOptimum) {
         return *std::max_element(count.begin(), count.end());
       };
       EXPECT_LE(most_upper_bounds(dp), 1);
-      if (mode == ConstraintMode::kCertified) EXPECT_GE(most_upper_bounds(df), 2);
+      if (mode == ConstraintMode::kCertified) {
+        EXPECT_GE(most_upper_bounds(df), 2);
+      }
       const auto socp = MakeSocpTemporalSolver();
       const TemporalResult rp = socp->Solve(p), rf = socp->Solve(full);
       ASSERT_TRUE(rp.is_success()) << rp.message;

@@ -273,6 +273,18 @@ TEST(TemporalBackends, TimeAllocatedCurvesWithSlowPieces) {
   }
 }
 
+// The rho cone is balanced by the size ||a|| can reach: sqrt(sum over cells of (min_j amax_j / |f'_j|)^2).
+// On a line of length L along x only the x axis has a tangent (|f'| = L everywhere), so every cell
+// contributes (amax / L)^2: the scale is sqrt(K) amax / L exactly (up to rounding).
+TEST(TemporalDiscretization, AccelerationNormScaleOnAStraightLine) {
+  for (int K : {5, 20, 80}) {
+    TemporalProblem p = LineProblem(10.0, K);
+    p.limits.max_acceleration = Eigen::Vector3d(1.5, 0.1, 0.1);  // y and z have no tangent: ignored
+    const TemporalDiscretization d = Discretize(p);
+    EXPECT_NEAR(d.acceleration_norm_scale, std::sqrt(K) * 1.5 / 10.0, 1e-12) << "K=" << K;
+  }
+}
+
 // Acceleration of the exact trajectory at the middle of cell k of piece i, computed from the
 // curve and b alone (b is linear on the cell, so b(s_mid) = (b^k + b^{k+1}) / 2).
 Eigen::Vector3d MidCellAcceleration(const TemporalProblem& p, const TemporalProfile& prof, int i, int k) {

@@ -65,6 +65,10 @@ struct TemporalDiscretization {
   int num_pieces = 0;
   int cells_per_piece = 0;
   double rho = 0.0;
+  // sqrt(sum over cells of a_cap^2), a_cap = min over axes of amax / |f'| at the cell middle (cells
+  // with a zero tangent left out; 1 if none is left): the size ||a|| can reach, which balances the
+  // two sides of the rho cone t * 1 >= ||a||^2 in the SOCP (see socp_backend.cpp).
+  double acceleration_norm_scale = 1.0;
   int num_vars = 0;                        // size of x
   std::vector<GridValue> grid;             // m (K + 1) values; piece i, point k at i (K + 1) + k
   std::vector<Cell> cells;                 // m K cells in path order
