@@ -428,6 +428,15 @@ struct Solver::Workspace {
   // Leaves the reduced method for the augmented one in the middle of a solve (the data and the
   // regularization in use are reloaded); the next Solve() analyzes the pattern afresh.
   void SwitchToAugmented();
+  // The iterate (x, y, z, s, tau, kappa) becomes the best one saved.
+  void RestoreBest() {
+    x = best_x;
+    y = best_y;
+    z = best_z;
+    s = best_s;
+    tau = best_tau;
+    kappa = best_kappa;
+  }
   // Reduced path: sol = K^{-1} rhs (unrefined, unpermuted full vectors) for one or two right-hand sides.
   void SolveReduced(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol);
   void SolveReduced2(const Eigen::VectorXd& rhs_a, Eigen::VectorXd& sol_a, const Eigen::VectorXd& rhs_b,
@@ -1683,12 +1692,7 @@ Result Solver::Solve(const Problem& problem) {
         // refinement recovered it). The augmented system does not form it: back to the best iterate,
         // and on with that method.
         W.SwitchToAugmented();
-        W.x = W.best_x;
-        W.y = W.best_y;
-        W.z = W.best_z;
-        W.s = W.best_s;
-        W.tau = W.best_tau;
-        W.kappa = W.best_kappa;
+        W.RestoreBest();
         progress_merit = best_merit;
         progress_iteration = iteration;
         continue;
@@ -1875,12 +1879,7 @@ Result Solver::Solve(const Problem& problem) {
 
   // ---- stalled or stopped: fall back to the best iterate ----
   if ((status == Status::kNumericalError || status == Status::kIterationLimit) && have_best) {
-    W.x = W.best_x;
-    W.y = W.best_y;
-    W.z = W.best_z;
-    W.s = W.best_s;
-    W.tau = W.best_tau;
-    W.kappa = W.best_kappa;
+    W.RestoreBest();
     if (best_reduced_ok) {
       message = "reduced accuracy (" + message + "; the best iterate meets the reduced tolerances)";
       status = Status::kOptimal;
