@@ -428,6 +428,7 @@ struct Solver::Workspace {
   // Leaves the reduced method for the augmented one in the middle of a solve (the data and the
   // regularization in use are reloaded); the next Solve() analyzes the pattern afresh.
   void SwitchToAugmented();
+  void LoadAugmentedData();  // A and G into the augmented KKT matrix
   // The iterate (x, y, z, s, tau, kappa) becomes the best one saved.
   void RestoreBest() {
     x = best_x;
@@ -951,18 +952,19 @@ void Solver::Workspace::LoadValues(const Problem& problem, const Options& option
       if (g_target1[q] >= 0) G.val[g_target1[q]] += g_coef1[q] * it.value();
     }
   }
-  if (!reduced) {
-    for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
-    for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
-  }
+  if (!reduced) LoadAugmentedData();
   SetStaticRegularization(options.static_regularization);
+}
+
+void Solver::Workspace::LoadAugmentedData() {
+  for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
+  for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
 }
 
 void Solver::Workspace::SwitchToAugmented() {
   reduced = false;
   AnalyzeAugmented();
-  for (std::size_t e = 0; e < A.val.size(); ++e) k_val[a_slot[e]] = A.val[e];
-  for (std::size_t e = 0; e < G.val.size(); ++e) k_val[g_slot[e]] = G.val[e];
+  LoadAugmentedData();
   SetStaticRegularization(static_reg);
   analyzed = false;
 }
@@ -1686,7 +1688,12 @@ Result Solver::Solve(const Problem& problem) {
       // last digits as the scaling degenerates), not a phase that recovers: stop at once and return
       // the best iterate instead of wandering until the stall window closes.
       constexpr double kDivergence = 1e3;  // merit factor; the breakdowns seen rose ~1e4-fold at once
-      if (best_reduced_ok && merit > kDivergence * best_merit && W.reduced) {
+      if (best_reduced_ok && merit > kDivergence * best_merit) {
+        if (!W.reduced) {
+          status = Status::kNumericalError;
+          message = "the merit rose 1000-fold from the best iterate (rounding near the optimum)";
+          break;
+        }
         // The reduced method forms G'W^{-2}G, whose rounding can spoil the direction when the scaling
         // is extreme (seen on small random SOCPs: the dual residual jumped from 2e-7 to 4e-2 and no
         // refinement recovered it). The augmented system does not form it: back to the best iterate,
@@ -1696,11 +1703,6 @@ Result Solver::Solve(const Problem& problem) {
         progress_merit = best_merit;
         progress_iteration = iteration;
         continue;
-      }
-      if (best_reduced_ok && merit > kDivergence * best_merit) {
-        status = Status::kNumericalError;
-        message = "the merit rose 1000-fold from the best iterate (rounding near the optimum)";
-        break;
       }
       // Near the optimum (the best iterate meets the reduced tolerances) a short stall ends the
       // iteration; elsewhere slow phases are normal, so the window is four times longer.

@@ -419,11 +419,16 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   // tangent length on the grid and vref the largest velocity limit: x is then about the squared
   // speed relative to the limit. Unscaled b spans 1 to 1e4 on curves with short, slow pieces (a time
   // allocation's last piece), and the conic solver stalled on such problems.
+  // The tangent f'(k ds) at every grid point, also used by the paper's velocity rows below.
+  std::vector<Eigen::Vector3d> grid_tangent(d.grid.size());
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k <= K; ++k) grid_tangent[static_cast<size_t>(d.GridIndex(i, k))] = curve.Evaluate(i, k * ds, 1);
+  }
   const double vref = limits.max_velocity.maxCoeff();
   std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
   for (int i = 0; i < m; ++i) {
     double t_max = 0.0;
-    for (int k = 0; k <= K; ++k) t_max = std::max(t_max, curve.Evaluate(i, k * ds, 1).norm());
+    for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
     if (t_max > problem.zero_tangent_tolerance) piece_scale[static_cast<size_t>(i)] = vref * vref / (t_max * t_max);
   }
   int next_var = 0;
@@ -482,7 +487,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       for (int k = 0; k <= K; ++k) {
         const int g = d.GridIndex(i, k);
         const GridValue& v = d.grid[static_cast<size_t>(g)];
-        const Eigen::Vector3d t = curve.Evaluate(i, k * ds, 1);
+        const Eigen::Vector3d& t = grid_tangent[static_cast<size_t>(g)];
         for (int a = 0; a < 3; ++a) {
           // A tangent component that vanishes up to rounding (e.g. 1e-15 on an axis the curve
           // does not move along) bounds nothing but would put a huge number (vmax^2 / 1e-30) into
