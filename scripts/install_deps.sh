@@ -13,6 +13,7 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev
   libcairo2-dev
   python3-matplotlib
+  python3-cvxopt python3-numpy
 )
 
 missing=()
