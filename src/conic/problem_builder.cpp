@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace timeopt::conic {
 
@@ -14,18 +15,19 @@ int ProblemBuilder::AddVariables(int n) {
   return first;
 }
 
-void ProblemBuilder::CheckTerms(const std::vector<Term>& terms, const char* where) const {
-  for (const Term& t : terms) {
-    if (t.var < 0 || t.var >= num_variables_) {
-      throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(t.var) +
-                                  " does not exist (" + std::to_string(num_variables_) +
-                                  " variables)");
-    }
+void ProblemBuilder::CheckVariable(int var, const char* where) const {
+  if (var < 0 || var >= num_variables_) {
+    throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(var) + " does not exist (" +
+                                std::to_string(num_variables_) + " variables)");
   }
 }
 
+void ProblemBuilder::CheckTerms(const std::vector<Term>& terms, const char* where) const {
+  for (const Term& t : terms) CheckVariable(t.var, where);
+}
+
 void ProblemBuilder::SetObjectiveCoefficient(int var, double coef) {
-  CheckTerms({Term{var, coef}}, "SetObjectiveCoefficient");
+  CheckVariable(var, "SetObjectiveCoefficient");
   objective_[var] += coef;
 }
 
@@ -46,11 +48,10 @@ ProblemBuilder::Row ProblemBuilder::AppendRow(const AffineExpr& e, double sign) 
 void ProblemBuilder::AddLessEqual(const std::vector<Term>& terms, double upper) {
   CheckTerms(terms, "AddLessEqual");
   // upper - sum(terms) >= 0.
-  AffineExpr e;
-  e.terms.reserve(terms.size());
-  for (const Term& t : terms) e.terms.push_back(Term{t.var, -t.coef});
-  e.constant = upper;
-  orthant_rows_.push_back(AppendRow(e, 1.0));
+  Row row{static_cast<int>(terms_.size()), 0, upper};
+  for (const Term& t : terms) terms_.push_back(Term{t.var, -t.coef});
+  row.end = static_cast<int>(terms_.size());
+  orthant_rows_.push_back(row);
 }
 
 void ProblemBuilder::AddNonnegative(const AffineExpr& e) {
@@ -79,6 +80,51 @@ int ProblemBuilder::num_cone_rows() const {
   return static_cast<int>(orthant_rows_.size() + soc_rows_.size() + rotated_rows_.size());
 }
 
+namespace {
+
+// Compressed columns from rows given in increasing order: a counting sort by column keeps each
+// column's rows increasing, and repeated (row, column) terms are summed as they are placed.
+// Linear in the number of terms (Eigen's setFromTriplets sorts through a transposed copy).
+template <typename ForEachRow>
+Eigen::SparseMatrix<double> CompressRows(int rows, int cols, std::size_t num_terms, ForEachRow for_each_row) {
+  std::vector<int> count(static_cast<std::size_t>(cols) + 1, 0);
+  for_each_row([&](int, int var, double) { ++count[static_cast<std::size_t>(var) + 1]; });
+  for (int j = 0; j < cols; ++j) count[j + 1] += count[j];
+  std::vector<int> row_index(num_terms);
+  std::vector<double> values(num_terms);
+  std::vector<int> next(count.begin(), count.end() - 1);
+  for_each_row([&](int r, int var, double v) {
+    int& q = next[var];
+    if (q > count[var] && row_index[q - 1] == r) {
+      values[q - 1] += v;  // a repeated term of the same row
+      return;
+    }
+    row_index[q] = r;
+    values[q] = v;
+    ++q;
+  });
+  Eigen::SparseMatrix<double> matrix(rows, cols);
+  std::size_t stored = 0;
+  for (int j = 0; j < cols; ++j) stored += next[j] - count[j];
+  matrix.resizeNonZeros(static_cast<Eigen::Index>(stored));
+  int* outer = matrix.outerIndexPtr();
+  int* inner = matrix.innerIndexPtr();
+  double* val = matrix.valuePtr();
+  int out = 0;
+  for (int j = 0; j < cols; ++j) {
+    outer[j] = out;
+    for (int q = count[j]; q < next[j]; ++q) {
+      inner[out] = row_index[q];
+      val[out] = values[q];
+      ++out;
+    }
+  }
+  outer[cols] = out;
+  return matrix;
+}
+
+}  // namespace
+
 Problem ProblemBuilder::Build() const {
   Problem problem;
   const int n = num_variables_;
@@ -86,36 +132,27 @@ Problem ProblemBuilder::Build() const {
 
   const int p = num_equalities();
   problem.b = Eigen::Map<const Eigen::VectorXd>(equality_rhs_.data(), p);
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(equality_terms_.size());
-  for (int i = 0; i < p; ++i) {
-    for (int q = equality_begin_[i]; q < equality_begin_[i + 1]; ++q) {
-      triplets.emplace_back(i, equality_terms_[q].var, equality_terms_[q].coef);
+  problem.A = CompressRows(p, n, equality_terms_.size(), [&](auto&& emit) {
+    for (int i = 0; i < p; ++i) {
+      for (int q = equality_begin_[i]; q < equality_begin_[i + 1]; ++q) {
+        emit(i, equality_terms_[q].var, equality_terms_[q].coef);
+      }
     }
-  }
-  problem.A.resize(p, n);
-  problem.A.setFromTriplets(triplets.begin(), triplets.end());
-  problem.A.makeCompressed();
+  });
 
   // A cone row means constant + sum(terms) in K, i.e. s = h - G x with h = constant, G = -terms.
   const int m = num_cone_rows();
   problem.h.resize(m);
-  triplets.clear();
-  triplets.reserve(terms_.size());
-  int r = 0;
-  auto emit = [&](const std::vector<Row>& rows) {
-    for (const Row& row : rows) {
-      for (int q = row.begin; q < row.end; ++q) triplets.emplace_back(r, terms_[q].var, -terms_[q].coef);
-      problem.h[r] = row.constant;
-      ++r;
+  problem.G = CompressRows(m, n, terms_.size(), [&](auto&& emit) {
+    int r = 0;
+    for (const std::vector<Row>* rows : {&orthant_rows_, &soc_rows_, &rotated_rows_}) {
+      for (const Row& row : *rows) {
+        for (int q = row.begin; q < row.end; ++q) emit(r, terms_[q].var, -terms_[q].coef);
+        problem.h[r] = row.constant;
+        ++r;
+      }
     }
-  };
-  emit(orthant_rows_);
-  emit(soc_rows_);
-  emit(rotated_rows_);
-  problem.G.resize(m, n);
-  problem.G.setFromTriplets(triplets.begin(), triplets.end());
-  problem.G.makeCompressed();
+  });
 
   problem.cones.num_nonnegative = static_cast<int>(orthant_rows_.size());
   problem.cones.soc_dims = soc_dims_;

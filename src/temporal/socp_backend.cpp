@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <initializer_list>
+#include <vector>
 
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
@@ -35,13 +37,25 @@ conic::Problem BuildSocp(const TemporalDiscretization& d) {
   const int c0 = builder.AddVariables(nx);
   const int d0 = builder.AddVariables(static_cast<int>(d.cells.size()));
 
+  // Rows and terms are written into reused buffers (no allocation per cone or row).
+  std::vector<conic::AffineExpr> cone(3);
+  std::vector<conic::Term> terms;
+  const auto set_row = [&cone](int r, std::initializer_list<conic::Term> row_terms, double constant) {
+    cone[r].terms.assign(row_terms);
+    cone[r].constant = constant;
+  };
   for (int v = 0; v < nx; ++v) {
-    builder.AddRotatedCone({conic::AffineExpr{{{x0 + v, 1.0}}, 0.0}, conic::AffineExpr{{}, 0.5},
-                            conic::AffineExpr{{{c0 + v, 1.0}}, 0.0}});
+    set_row(0, {{x0 + v, 1.0}}, 0.0);
+    set_row(1, {}, 0.5);
+    set_row(2, {{c0 + v, 1.0}}, 0.0);
+    builder.AddRotatedCone(cone);
     // x / upper <= 1, like every other linear row (right-hand side 1): the solver starts at s = e,
     // which is then the slack of every row at x = 0 (x <= upper with upper ~1e3 where the tangent is
     // short started 1e3 off and cost 4-6 iterations on long paths).
-    if (std::isfinite(d.var_upper[v])) builder.AddLessEqual({{x0 + v, 1.0 / d.var_upper[v]}}, 1.0);
+    if (std::isfinite(d.var_upper[v])) {
+      terms.assign({{x0 + v, 1.0 / d.var_upper[v]}});
+      builder.AddLessEqual(terms, 1.0);
+    }
   }
 
   // sqrt(b_g) as an affine expression in c.
@@ -68,10 +82,12 @@ conic::Problem BuildSocp(const TemporalDiscretization& d) {
     const Cell& cell = d.cells[k];
     const int dk = d0 + static_cast<int>(k);
     builder.SetObjectiveCoefficient(dk, 2.0 * cell.ds);
-    conic::AffineExpr roots;
-    add_root(cell.first_grid, roots);
-    add_root(cell.first_grid + 1, roots);
-    builder.AddRotatedCone({conic::AffineExpr{{{dk, 1.0}}, 0.0}, roots, conic::AffineExpr{{}, sqrt2}});
+    set_row(0, {{dk, 1.0}}, 0.0);
+    set_row(1, {}, 0.0);
+    add_root(cell.first_grid, cone[1]);
+    add_root(cell.first_grid + 1, cone[1]);
+    set_row(2, {}, sqrt2);
+    builder.AddRotatedCone(cone);
   }
 
   if (d.rho > 0.0) {
@@ -99,15 +115,16 @@ conic::Problem BuildSocp(const TemporalDiscretization& d) {
   }
 
   for (const LinearRow& row : d.rows) {
-    std::vector<conic::Term> plus, minus;
-    plus.reserve(row.terms.size());
-    minus.reserve(row.terms.size());
-    for (const auto& t : row.terms) {
-      plus.push_back({x0 + t.first, t.second});
-      minus.push_back({x0 + t.first, -t.second});
+    if (std::isfinite(row.upper)) {
+      terms.clear();
+      for (const auto& t : row.terms) terms.push_back({x0 + t.first, t.second});
+      builder.AddLessEqual(terms, row.upper);
     }
-    if (std::isfinite(row.upper)) builder.AddLessEqual(plus, row.upper);
-    if (std::isfinite(row.lower)) builder.AddLessEqual(minus, -row.lower);
+    if (std::isfinite(row.lower)) {
+      terms.clear();
+      for (const auto& t : row.terms) terms.push_back({x0 + t.first, -t.second});
+      builder.AddLessEqual(terms, -row.lower);
+    }
   }
   return builder.Build();
 }

@@ -43,7 +43,15 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   const Eigen::Vector3d inv_v = problem.limits.max_velocity.cwiseInverse();
   const Eigen::Vector3d inv_a = problem.limits.max_acceleration.cwiseInverse();
   for (int i = 0; i < profile.num_pieces(); ++i) {
-    const PolynomialPiece& piece = problem.curve.piece(i);
+    // The derivatives' coefficients once per piece, then Horner's rule per sample (evaluating the
+    // piece's derivatives from its own coefficients at every sample was 5% of a solve at m=10, K=50).
+    const PolynomialPiece::Coefficients d1 = problem.curve.piece(i).Derivative(1).coefficients();
+    const PolynomialPiece::Coefficients d2 = problem.curve.piece(i).Derivative(2).coefficients();
+    const auto horner = [](const PolynomialPiece::Coefficients& c, double s) {
+      Eigen::Vector3d v = c.col(c.cols() - 1);
+      for (Eigen::Index q = c.cols() - 2; q >= 0; --q) v = v * s + c.col(q);
+      return v;
+    };
     for (int k = 0; k < K; ++k) {
       const double b0 = profile.b(i, k), b1 = profile.b(i, k + 1);
       const double a = profile.a(i, k);
@@ -51,7 +59,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
         const double u = static_cast<double>(j) / samples_per_cell;
         const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
         const double s = (k + u) * ds;
-        const Eigen::Vector3d f1 = piece.Evaluate(s, 1), f2 = piece.Evaluate(s, 2);
+        const Eigen::Vector3d f1 = horner(d1, s), f2 = horner(d2, s);
         vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
         ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
       }

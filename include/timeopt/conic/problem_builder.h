@@ -64,6 +64,7 @@ class ProblemBuilder {
     int end;          // one past the last term
     double constant;  // the row means constant + sum(terms) in K (h = constant, G = -terms)
   };
+  void CheckVariable(int var, const char* where) const;
   void CheckTerms(const std::vector<Term>& terms, const char* where) const;
   Row AppendRow(const AffineExpr& e, double sign);
 
