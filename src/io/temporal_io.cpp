@@ -126,6 +126,7 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   j["solve_time_ms"] = r.solve_time_seconds * 1e3;
   j["build_time_ms"] = r.build_time_seconds * 1e3;
   j["message"] = r.message;
+  j["reduced_accuracy"] = r.reduced_accuracy;
   j["max_velocity_ratio"] = ok ? json(r.max_velocity_ratio) : json(nullptr);
   j["max_acceleration_ratio"] = ok ? json(r.max_acceleration_ratio) : json(nullptr);
   json joints = json::array();

@@ -452,6 +452,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
         result->status = TemporalStatus::kOptimal;
         if (status == Ipopt::Solved_To_Acceptable_Level) {
           result->message = "Ipopt: solved to the acceptable level";
+          result->reduced_accuracy = true;
         }
         FinishOptimalResult(problem, d, x, result);
         return;

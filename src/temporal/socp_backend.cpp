@@ -187,6 +187,7 @@ class SocpTemporalSolver final : public TemporalSolver {
         std::vector<double> x(r.x.data(), r.x.data() + d.num_vars);
         FinishOptimalResult(problem, d, x, &result);
         result.message = r.message;
+        result.reduced_accuracy = r.reduced_accuracy;
         break;
       }
       case conic::Status::kPrimalInfeasible:

@@ -65,9 +65,10 @@ struct TemporalDiscretization {
   int num_pieces = 0;
   int cells_per_piece = 0;
   double rho = 0.0;
-  // sqrt(sum over cells of a_cap^2), a_cap = min over axes of amax / |f'| at the cell middle (cells
-  // with a zero tangent left out; 1 if none is left): the size ||a|| can reach, which balances the
-  // two sides of the rho cone t * 1 >= ||a||^2 in the SOCP (see socp_backend.cpp).
+  // sqrt(N) times the median over cells of a_cap = min over axes of amax / |f'| at the cell middle
+  // (N cells with a non-zero tangent; 1 if there are none): the size ||a|| can reach, which balances
+  // the two sides of the rho cone t * 1 >= ||a||^2 in the SOCP (see socp_backend.cpp). The median,
+  // not a root-sum-square, so that cells near a vanishing tangent (unbounded caps) do not set it.
   double acceleration_norm_scale = 1.0;
   int num_vars = 0;                        // size of x
   std::vector<GridValue> grid;             // m (K + 1) values; piece i, point k at i (K + 1) + k

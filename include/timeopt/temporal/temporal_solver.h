@@ -45,6 +45,11 @@ struct TemporalResult {
   double max_velocity_ratio = 0.0;
   double max_acceleration_ratio = 0.0;
 
+  // Optimal, but only to the backend's reduced tolerances (the conic solver's
+  // reduced_feasibility_tolerance and reduced_gap_tolerance; Ipopt's acceptable level): rounding
+  // stopped the solver short of its tolerances. `message` says why.
+  bool reduced_accuracy = false;
+
   bool is_success() const { return status == TemporalStatus::kOptimal; }
 };
 
