@@ -2,14 +2,15 @@
 """Cross-check of `timeopt temporal` against an independent formulation and solver.
 
 The paper-mode temporal problem is written here a second time, from the contract in DESIGN.md alone
-(velocity at grid points, acceleration at cell middles, C1 joints share b, boundary speeds along the
-tangent, the acceleration-change rows, rho), as a second-order cone program for CVXOPT's conelp
-(Debian's python3-cvxopt: Python and C, its own interior-point code and CHOLMOD). Random curves are
-generated here, so they are not in the repository. Each problem is solved by `timeopt temporal
---solver socp` and `--solver ipopt` and by CVXOPT; the traversal times T must agree to 1e-6 relative
-(the issue asks 1e-5 of an independent check; all three solve to about 1e-8, so 1e-6 leaves a margin
-of 100 for the solvers' stopping rules and still catches any difference in the rows, which moves T
-by far more: one acceleration row dropped from one cell of 200 moves T by ~1e-4).
+(velocity at grid points, acceleration at cell middles, joints with parallel tangents by eq. 42,
+boundary speeds along the tangent, the acceleration-change rows, rho), as a second-order cone program
+for CVXOPT's conelp (Debian's python3-cvxopt, an interior-point solver of its own). The random curves
+(cubic and quintic, C1 or only G1 in s) are generated here, so they are not in the repository. Each
+problem is solved by `timeopt temporal --solver socp` and `--solver ipopt` and by CVXOPT; the
+traversal times T must agree to 1e-6 relative (J too; T to 1e-5 when rho > 0, see below). All three
+solvers stop at gaps near 1e-8, so the margin is about 100, while a difference in the rows shows at
+once: moving the acceleration sample from the cell middle to 0.45 of the cell in this script alone
+made every one of the 24 problems fail (T off by up to 7.6e-3; one became infeasible).
 
 Exit codes: 0 all agree, 1 a disagreement (each printed), 77 skipped (CVXOPT or numpy missing).
 Usage: cvxopt_cross_check.py TIMEOPT_EXECUTABLE [--problems N] [--seed S] [--keep DIR]
