@@ -102,6 +102,7 @@ TEST_F(CliTest, TemporalSolvesTheContractExample) {
     EXPECT_THAT(json, HasSubstr("\"status\": \"optimal\""));
     EXPECT_THAT(json, HasSubstr("\"solver\": \"" + solver + "\""));
     EXPECT_THAT(json, HasSubstr("\"total_time\": 7.0")) << json;  // closed form L/v + v/a = 7
+    EXPECT_THAT(json, HasSubstr("\"reduced_accuracy\": false")) << json;  // the line solves to full accuracy
     const std::string csv = ReadTextFile(Path("s.csv"));
     EXPECT_EQ(csv.rfind("t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz\n", 0), 0u);
     // 7 s at 10 Hz: t = 0.0 .. 6.9 plus the final state at 7.0.
