@@ -38,31 +38,27 @@ void ProblemBuilder::AddEquality(const std::vector<Term>& terms, double rhs) {
   equality_rhs_.push_back(rhs);
 }
 
-ProblemBuilder::Row ProblemBuilder::AppendRow(const AffineExpr& e, double sign) {
-  Row row{static_cast<int>(terms_.size()), 0, sign * e.constant};
-  for (const Term& t : e.terms) terms_.push_back(Term{t.var, sign * t.coef});
+ProblemBuilder::Row ProblemBuilder::AppendRow(const std::vector<Term>& terms, double term_sign, double constant) {
+  Row row{static_cast<int>(terms_.size()), 0, constant};
+  for (const Term& t : terms) terms_.push_back(Term{t.var, term_sign * t.coef});
   row.end = static_cast<int>(terms_.size());
   return row;
 }
 
 void ProblemBuilder::AddLessEqual(const std::vector<Term>& terms, double upper) {
   CheckTerms(terms, "AddLessEqual");
-  // upper - sum(terms) >= 0.
-  Row row{static_cast<int>(terms_.size()), 0, upper};
-  for (const Term& t : terms) terms_.push_back(Term{t.var, -t.coef});
-  row.end = static_cast<int>(terms_.size());
-  orthant_rows_.push_back(row);
+  orthant_rows_.push_back(AppendRow(terms, -1.0, upper));  // upper - sum(terms) >= 0
 }
 
 void ProblemBuilder::AddNonnegative(const AffineExpr& e) {
   CheckTerms(e.terms, "AddNonnegative");
-  orthant_rows_.push_back(AppendRow(e, 1.0));
+  orthant_rows_.push_back(AppendRow(e.terms, 1.0, e.constant));
 }
 
 void ProblemBuilder::AddSecondOrderCone(const std::vector<AffineExpr>& rows) {
   if (rows.empty()) throw std::invalid_argument("AddSecondOrderCone: rows is empty, expected >= 1");
   for (const AffineExpr& e : rows) CheckTerms(e.terms, "AddSecondOrderCone");
-  for (const AffineExpr& e : rows) soc_rows_.push_back(AppendRow(e, 1.0));
+  for (const AffineExpr& e : rows) soc_rows_.push_back(AppendRow(e.terms, 1.0, e.constant));
   soc_dims_.push_back(static_cast<int>(rows.size()));
 }
 
@@ -72,7 +68,7 @@ void ProblemBuilder::AddRotatedCone(const std::vector<AffineExpr>& rows) {
                                 " entries, expected >= 2");
   }
   for (const AffineExpr& e : rows) CheckTerms(e.terms, "AddRotatedCone");
-  for (const AffineExpr& e : rows) rotated_rows_.push_back(AppendRow(e, 1.0));
+  for (const AffineExpr& e : rows) rotated_rows_.push_back(AppendRow(e.terms, 1.0, e.constant));
   rotated_dims_.push_back(static_cast<int>(rows.size()));
 }
 

@@ -114,17 +114,15 @@ conic::Problem BuildSocp(const TemporalDiscretization& d) {
     builder.AddRotatedCone(rows);
   }
 
+  // sign * row <= bound.
+  const auto add_less_equal = [&](const LinearRow& row, double sign, double bound) {
+    terms.clear();
+    for (const auto& t : row.terms) terms.push_back({x0 + t.first, sign * t.second});
+    builder.AddLessEqual(terms, bound);
+  };
   for (const LinearRow& row : d.rows) {
-    if (std::isfinite(row.upper)) {
-      terms.clear();
-      for (const auto& t : row.terms) terms.push_back({x0 + t.first, t.second});
-      builder.AddLessEqual(terms, row.upper);
-    }
-    if (std::isfinite(row.lower)) {
-      terms.clear();
-      for (const auto& t : row.terms) terms.push_back({x0 + t.first, -t.second});
-      builder.AddLessEqual(terms, -row.lower);
-    }
+    if (std::isfinite(row.upper)) add_less_equal(row, 1.0, row.upper);
+    if (std::isfinite(row.lower)) add_less_equal(row, -1.0, -row.lower);
   }
   return builder.Build();
 }

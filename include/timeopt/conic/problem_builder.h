@@ -66,7 +66,8 @@ class ProblemBuilder {
   };
   void CheckVariable(int var, const char* where) const;
   void CheckTerms(const std::vector<Term>& terms, const char* where) const;
-  Row AppendRow(const AffineExpr& e, double sign);
+  // Appends term_sign * terms to terms_; the row means constant + sum(appended terms) in K.
+  Row AppendRow(const std::vector<Term>& terms, double term_sign, double constant);
 
   int num_variables_ = 0;
   std::vector<double> objective_;
