@@ -17,8 +17,8 @@ int ProblemBuilder::AddVariables(int n) {
 
 void ProblemBuilder::CheckVariable(int var, const char* where) const {
   if (var < 0 || var >= num_variables_) {
-    throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(var) + " does not exist (" +
-                                std::to_string(num_variables_) + " variables)");
+    throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(var) +
+                                " does not exist (" + std::to_string(num_variables_) + " variables)");
   }
 }
 
@@ -38,7 +38,8 @@ void ProblemBuilder::AddEquality(const std::vector<Term>& terms, double rhs) {
   equality_rhs_.push_back(rhs);
 }
 
-ProblemBuilder::Row ProblemBuilder::AppendRow(const std::vector<Term>& terms, double term_sign, double constant) {
+ProblemBuilder::Row ProblemBuilder::AppendRow(const std::vector<Term>& terms, double term_sign,
+                                              double constant) {
   Row row{static_cast<int>(terms_.size()), 0, constant};
   for (const Term& t : terms) terms_.push_back(Term{t.var, term_sign * t.coef});
   row.end = static_cast<int>(terms_.size());
