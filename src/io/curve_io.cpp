@@ -1,5 +1,6 @@
 #include "timeopt/io/curve_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -77,15 +78,16 @@ CurveFile CurveFromJson(const nlohmann::json& j, const std::string& context) {
       }
       axes[a] = FiniteArray(pj.at(axis_names[a]), name + "." + axis_names[a]);
     }
-    if (axes[0].empty()) throw std::invalid_argument(name + ".x: expected at least 1 coefficient");
-    for (int a = 1; a < 3; ++a) {
-      if (axes[a].size() != axes[0].size()) {
-        throw std::invalid_argument(name + "." + axis_names[a] + ": expected " +
-                                    std::to_string(axes[0].size()) + " coefficients like x, got " +
-                                    std::to_string(axes[a].size()));
+    // An axis may give fewer coefficients than another (a constant axis as [c]): the missing
+    // higher-order coefficients are zero.
+    size_t size = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (axes[a].empty()) {
+        throw std::invalid_argument(name + "." + axis_names[a] + ": expected at least 1 coefficient");
       }
+      size = std::max(size, axes[a].size());
     }
-    PolynomialPiece::Coefficients c(3, static_cast<Eigen::Index>(axes[0].size()));
+    PolynomialPiece::Coefficients c = PolynomialPiece::Coefficients::Zero(3, static_cast<Eigen::Index>(size));
     for (int a = 0; a < 3; ++a) {
       for (size_t k = 0; k < axes[a].size(); ++k) c(a, static_cast<Eigen::Index>(k)) = axes[a][k];
     }

@@ -49,12 +49,21 @@ TEST(CurveJson, DurationsRescaleToUnitPieces) {
   EXPECT_EQ(f.curve.Evaluate(0, 1.0), Eigen::Vector3d(2, 0, 1));
 }
 
+// A constant axis may be given as one coefficient: the missing ones are zero, so the piece is the
+// same as with every axis written out.
+TEST(CurveJson, ShorterAxesArePaddedWithZeros) {
+  const CurveFile short_axes = ParseCurveJson(R"({"pieces": [{"x": [0, 10, 0.5], "y": [2], "z": [1, 3]}]})");
+  const CurveFile full =
+      ParseCurveJson(R"({"pieces": [{"x": [0, 10, 0.5], "y": [2, 0, 0], "z": [1, 3, 0]}]})");
+  EXPECT_EQ(short_axes.curve.piece(0).coefficients(), full.curve.piece(0).coefficients());
+}
+
 TEST(CurveJson, BadInputNamesTheField) {
   EXPECT_THAT(ErrorOf("{\"pieces\": [ {\"x\": [1"), HasSubstr("malformed JSON"));
   EXPECT_THAT(ErrorOf(R"({"pieces": []})"), HasSubstr("curve.pieces: expected at least 1 piece"));
   EXPECT_THAT(ErrorOf(R"({"peaces": []})"), HasSubstr("curve.pieces: missing"));
-  EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1, 2], "y": [1], "z": [0, 0]}]})"),
-              HasSubstr("curve.pieces[0].y: expected 2 coefficients like x, got 1"));
+  EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1, 2], "y": [], "z": [0, 0]}]})"),
+              HasSubstr("curve.pieces[0].y: expected at least 1 coefficient"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1], "y": [1], "z": [0]}, {"x": [1], "y": ["a"], "z": [0]}]})"),
               HasSubstr("curve.pieces[1].y[0]: expected a number"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1], "y": [1]}]})"), HasSubstr("curve.pieces[0].z: missing"));
