@@ -2,8 +2,9 @@
 """Cross-check of `timeopt temporal` against an independent formulation and solver.
 
 The temporal problem is written here a second time, from the contract in DESIGN.md alone (velocity
-at grid points, acceleration at cell middles, joints with parallel tangents by eq. 42, boundary speeds
-along the tangent, the acceleration-change rows, rho; and, for every third problem, certified mode:
+at grid points, acceleration at cell middles, joints with parallel tangents by eq. 42 and a stop at
+kinks, boundary speeds along the tangent, the acceleration-change rows, rho, curves given with
+`durations`; and, for every third problem, certified mode:
 every Bernstein coefficient of the velocity and acceleration polynomials of every cell within the
 limits), as a second-order cone program for CVXOPT's conelp (Debian's python3-cvxopt, an
 interior-point solver of its own). The random curves (cubic and quintic, C1 or only G1 in s) are
@@ -83,8 +84,15 @@ def random_problem(rng, mode):
     # by kappa (what a time-parameterized planner's pieces become once rescaled to unit pieces).
     g1 = rng.random() < 0.5
     kappa = [rng.uniform(0.5, 2.0) if g1 else 1.0 for _ in range(pieces + 1)]
-    coefs = [hermite_piece(points[i], kappa[i] * tangents[i] if i > 0 else tangents[i], points[i + 1],
-                           tangents[i + 1], bump, rng) for i in range(pieces)]
+    # Some joints are kinks: the next piece starts in another direction, and the vehicle must stop.
+    start_tangents = [kappa[i] * tangents[i] if i > 0 else tangents[i] for i in range(pieces)]
+    for i in range(1, pieces):
+        if rng.random() < 0.25:
+            turn = np.array([rng.uniform(-1, 1) for _ in range(3)])
+            start_tangents[i] = np.linalg.norm(tangents[i]) * (tangents[i] + 2.0 * turn) / np.linalg.norm(
+                tangents[i] + 2.0 * turn)
+    coefs = [hermite_piece(points[i], start_tangents[i], points[i + 1], tangents[i + 1], bump, rng)
+             for i in range(pieces)]
     vmax = [rng.uniform(1.0, 4.0) for _ in range(3)]
     amax = [rng.uniform(1.0, 4.0) for _ in range(3)]
     problem = {
@@ -104,6 +112,15 @@ def random_problem(rng, mode):
     if rng.random() < 0.3:
         problem["limits"]["max_acceleration_change"] = rng.uniform(0.5, 2.0)
     problem["boundary"] = boundary
+    if rng.random() < 0.3:
+        # The same curve as a time-parameterized planner writes it: piece i in tau in [0, h_i], so
+        # the coefficient of tau^j is c_j / h_i^j (DESIGN.md: rescaled to s = tau / h_i on input).
+        durations = [rng.uniform(0.5, 3.0) for _ in range(pieces)]
+        problem["curve"] = {
+            "durations": durations,
+            "pieces": [{axis: (c[a] / durations[i] ** np.arange(c.shape[1])).tolist()
+                        for a, axis in enumerate("xyz")} for i, c in enumerate(coefs)],
+        }
     return problem, coefs
 
 
@@ -183,6 +200,16 @@ def solve_with_cvxopt(problem, coefs, tolerance):
     for g, (i, k), key in ((point(0, 0), (0, 0), "start_velocity"), (point(m - 1, K), (m - 1, K), "end_velocity")):
         v = np.array(bnd[key], dtype=float)
         fixed[g] = float(v @ v) / float(tangent(i, k) @ tangent(i, k))
+    # Joints: where the tangents turn (a kink) the vehicle stops, b = 0 on both sides; where they are
+    # parallel, eq. 42 (below).
+    parallel = []
+    for i in range(m - 1):
+        t_end, t_start = tangent(i, K), tangent(i + 1, 0)
+        cross = np.linalg.norm(np.cross(t_end, t_start))
+        parallel.append(cross <= 1e-9 * np.linalg.norm(t_end) * np.linalg.norm(t_start) and t_end @ t_start > 0)
+        if not parallel[-1]:
+            fixed[point(i, K)] = 0.0
+            fixed[point(i + 1, 0)] = 0.0
     free = [g for g in range(m * (K + 1)) if g not in fixed]
     bvar = {g: i for i, g in enumerate(free)}
     nb = len(free)
@@ -221,9 +248,10 @@ def solve_with_cvxopt(problem, coefs, tolerance):
         elif const > upper + 1e-12:
             raise ValueError("a fixed value violates a row")
 
-    # Joints (eq. 42): velocity continuity, b_{i+1}^0 |f'_{i+1}(0)|^2 = b_i^K |f'_i(1)|^2 (the curves
-    # here have parallel tangents at every joint).
+    # Eq. 42 at parallel joints: velocity continuity, b_{i+1}^0 |f'_{i+1}(0)|^2 = b_i^K |f'_i(1)|^2.
     for i in range(m - 1):
+        if not parallel[i]:
+            continue
         terms, const = affine([b_terms(point(i + 1, 0), float(tangent(i + 1, 0) @ tangent(i + 1, 0))),
                                b_terms(point(i, K), -float(tangent(i, K) @ tangent(i, K)))])
         r = len(eq_rhs)
