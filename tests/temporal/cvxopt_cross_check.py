@@ -177,7 +177,7 @@ def certified_rows(coefs, cells, ds, vmax, amax, b_terms, less_equal):
 
 
 def solve_with_cvxopt(problem, coefs, tolerance):
-    """The paper's SOCP, written from DESIGN.md, solved by CVXOPT. Returns (status, T, J, seconds)."""
+    """The temporal SOCP, written from DESIGN.md, solved by CVXOPT. Returns (status, T, J, seconds)."""
     K = problem["discretization"]["K"]
     ds = 1.0 / K
     m = len(coefs)
