@@ -101,7 +101,9 @@ const char* ToString(KktMethod method);
 
 /// Progress of one interior-point iteration, given to Options::callback.
 struct IterationInfo {
-  int iteration = 0;               ///< 0 for the initial point, then 1, 2, ...
+  /// 0 for the initial point, then 1, 2, ... Near the optimum the midpoint of a step that missed the
+  /// tolerances is measured once (no KKT solve) and reported with the same number again.
+  int iteration = 0;
   double primal_objective = 0.0;   ///< c'x / tau.
   double dual_objective = 0.0;     ///< -(b'y + h'z) / tau.
   double gap = 0.0;                ///< s'z / tau^2 (absolute complementarity gap).
