@@ -1,7 +1,8 @@
 // Temporal stage benchmarks (issue 4): SOCP vs Ipopt over m in {5, 10, 20} pieces and K in
 // {30, 50, 100} cells per piece, and SOCP time against the number of cells N = m K from 100 to
 // 20,000 with its log-log slope. Curves: natural cubic splines through a seeded random walk,
-// vmax = 3 m/s, amax = 2 m/s^2 per axis, rest to rest, rho = 0, paper constraints.
+// vmax = 3 m/s, amax = 2 m/s^2 per axis, rest to rest, rho = 0, paper constraints; BM_SocpRho and
+// BM_IpoptRho the same at m = 10, K = 50 with rho = 0.1 and 1.
 // Run: ./build/temporal_benchmark --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 
 #include <benchmark/benchmark.h>
@@ -18,7 +19,7 @@ namespace {
 
 using namespace timeopt;
 
-TemporalProblem MakeProblem(int pieces, int K, ConstraintMode mode = ConstraintMode::kPaper) {
+TemporalProblem MakeProblem(int pieces, int K, ConstraintMode mode = ConstraintMode::kPaper, double rho = 0.0) {
   std::mt19937 rng(1234);
   std::uniform_real_distribution<double> u(-4.0, 4.0);
   Waypoints w(3, pieces + 1);
@@ -30,11 +31,13 @@ TemporalProblem MakeProblem(int pieces, int K, ConstraintMode mode = ConstraintM
   p.limits.max_acceleration.setConstant(2.0);
   p.cells_per_piece = K;
   p.constraint_mode = mode;
+  p.rho = rho;
   return p;
 }
 
-void Run(benchmark::State& state, TemporalBackend backend, ConstraintMode mode) {
-  const TemporalProblem p = MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), mode);
+void Run(benchmark::State& state, TemporalBackend backend, ConstraintMode mode, double rho = 0.0) {
+  const TemporalProblem p =
+      MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), mode, rho);
   auto solver = MakeTemporalSolver(backend);
   TemporalResult r;
   for (auto _ : state) {
@@ -63,6 +66,16 @@ void Grid(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_Socp)->Apply(Grid);
 BENCHMARK(BM_SocpCertified)->Apply(Grid);
 BENCHMARK(BM_Ipopt)->Apply(Grid);
+
+// rho > 0 (the one large rotated cone of eq. 50): m = 10, K = 50, rho = 0.1 * the third argument.
+void BM_SocpRho(benchmark::State& s) {
+  Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper, 0.1 * static_cast<double>(s.range(2)));
+}
+void BM_IpoptRho(benchmark::State& s) {
+  Run(s, TemporalBackend::kIpopt, ConstraintMode::kPaper, 0.1 * static_cast<double>(s.range(2)));
+}
+BENCHMARK(BM_SocpRho)->Args({10, 50, 1})->Args({10, 50, 10})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IpoptRho)->Args({10, 50, 1})->Args({10, 50, 10})->Unit(benchmark::kMillisecond);
 
 // Scaling in N = m K with K = 50 fixed (m = 2 .. 400).
 void BM_SocpScaling(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper); }
