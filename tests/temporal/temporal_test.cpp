@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 
 #include <Eigen/Dense>
 #include <gmock/gmock.h>
@@ -281,18 +282,21 @@ TEST(TemporalBackends, LongPathsNeedNoMoreIterations) {
   }
 }
 
+// tests/temporal/data/NAME.json solved by the SOCP and the Ipopt backend, in that order.
+std::pair<TemporalResult, TemporalResult> SolveDataProblemWithBothBackends(const std::string& name) {
+  const TemporalProblem p =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/" + name + ".json");
+  return {MakeSocpTemporalSolver()->Solve(p), MakeIpoptTemporalSolver()->Solve(p)};
+}
+
 // Curves that the planner's time-coupled baseline produced (polynomials in time, 10 pieces, rest to
 // rest, certified rows, K = 20): pieces with tangents from 0.006 to 2 m per unit s, so the optimal b
 // spans 1 to 1e4. Before the unknowns were scaled per piece the conic solver stalled on both (no
 // progress after 65 iterations; the iteration limit of 100) while Ipopt solved them; now both
 // backends agree to the 1e-6.
 TEST(TemporalBackends, TimeAllocatedCurvesWithSlowPieces) {
-  const auto socp = MakeSocpTemporalSolver();
-  const auto ipopt = MakeIpoptTemporalSolver();
   for (const char* name : {"time_allocated_a", "time_allocated_b"}) {
-    const TemporalProblem p =
-        ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/" + name + ".json");
-    const TemporalResult a = socp->Solve(p), b = ipopt->Solve(p);
+    const auto [a, b] = SolveDataProblemWithBothBackends(name);
     ASSERT_TRUE(a.is_success()) << name << ": " << a.message;
     ASSERT_TRUE(b.is_success()) << name << ": " << b.message;
     EXPECT_NEAR(a.total_time, b.total_time, 1e-6 * b.total_time) << name;
@@ -304,14 +308,11 @@ TEST(TemporalBackends, TimeAllocatedCurvesWithSlowPieces) {
 // and 100) on which the last full steps traded one criterion for another: the primal residual,
 // spoiled by rounding in the final solves, went above the tolerance as the gap came below it, and the
 // solve ended with reduced accuracy (best iterates 1.02-1.4x from the tolerances). The midpoint of
-// such a step (the conic solver's lookback, see Solver::Solve) meets all of them; J agrees with Ipopt to 1e-7 relative.
+// such a step (the conic solver's lookback, see Solver::Solve) meets all of them; J agrees with
+// Ipopt to 1e-7 relative.
 TEST(TemporalBackends, RhoAndLambdaEndGameReachesFullAccuracy) {
-  const auto socp = MakeSocpTemporalSolver();
-  const auto ipopt = MakeIpoptTemporalSolver();
   for (const char* name : {"lookback_rho_lambda_a", "lookback_rho_lambda_b"}) {
-    const TemporalProblem p =
-        ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/" + name + ".json");
-    const TemporalResult a = socp->Solve(p), b = ipopt->Solve(p);
+    const auto [a, b] = SolveDataProblemWithBothBackends(name);
     ASSERT_TRUE(a.is_success()) << name << ": " << a.message;
     ASSERT_TRUE(b.is_success()) << name << ": " << b.message;
     EXPECT_FALSE(a.reduced_accuracy) << name << ": " << a.message;
