@@ -1,6 +1,7 @@
 #include "timeopt/conic/problem_builder.h"
 
 #include <cmath>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -139,14 +140,19 @@ Problem ProblemBuilder::Build() const {
 
   // A cone row means constant + sum(terms) in K, i.e. s = h - G x with h = constant, G = -terms.
   const int m = num_cone_rows();
+  const std::initializer_list<const std::vector<Row>*> cone_rows = {&orthant_rows_, &soc_rows_,
+                                                                    &rotated_rows_};
   problem.h.resize(m);
+  int r = 0;
+  for (const std::vector<Row>* rows : cone_rows) {
+    for (const Row& row : *rows) problem.h[r++] = row.constant;
+  }
   problem.G = CompressRows(m, n, terms_.size(), [&](auto&& emit) {
-    int r = 0;
-    for (const std::vector<Row>* rows : {&orthant_rows_, &soc_rows_, &rotated_rows_}) {
+    int row_index = 0;
+    for (const std::vector<Row>* rows : cone_rows) {
       for (const Row& row : *rows) {
-        for (int q = row.begin; q < row.end; ++q) emit(r, terms_[q].var, -terms_[q].coef);
-        problem.h[r] = row.constant;
-        ++r;
+        for (int q = row.begin; q < row.end; ++q) emit(row_index, terms_[q].var, -terms_[q].coef);
+        ++row_index;
       }
     }
   });

@@ -429,6 +429,16 @@ struct Solver::Workspace {
   // regularization in use are reloaded); the next Solve() analyzes the pattern afresh.
   void SwitchToAugmented();
   void LoadAugmentedData();  // A and G into the augmented KKT matrix
+  // The iterate (x, y, z, s, tau, kappa) moves halfway back to the best one saved (the lookback in
+  // Solve: from a step taken at the best iterate, the midpoint of that step).
+  void MoveHalfwayToBest() {
+    x = 0.5 * (x + best_x);
+    y = 0.5 * (y + best_y);
+    z = 0.5 * (z + best_z);
+    s = 0.5 * (s + best_s);
+    tau = 0.5 * (tau + best_tau);
+    kappa = 0.5 * (kappa + best_kappa);
+  }
   // The iterate (x, y, z, s, tau, kappa) becomes the best one saved.
   void RestoreBest() {
     x = best_x;
@@ -1669,14 +1679,13 @@ Result Solver::Solve(const Problem& problem) {
       // measured once per step (no KKT solve; the callback sees the iteration number again) and the
       // iteration goes on from it.
       constexpr double kLookbackMerit = 10.0;
-      if (best_iteration == iteration - 1 && !looked_back && best_merit <= kLookbackMerit && step > 0.2) {
+      // A shorter step moved the iterate too little to have traded criteria, and its midpoint is
+      // nearly the best iterate again.
+      constexpr double kLookbackMinStep = 0.2;
+      if (best_iteration == iteration - 1 && !looked_back && best_merit <= kLookbackMerit &&
+          step > kLookbackMinStep) {
         step *= 0.5;
-        W.x = 0.5 * (W.x + W.best_x);
-        W.y = 0.5 * (W.y + W.best_y);
-        W.s = 0.5 * (W.s + W.best_s);
-        W.z = 0.5 * (W.z + W.best_z);
-        W.tau = 0.5 * (W.tau + W.best_tau);
-        W.kappa = 0.5 * (W.kappa + W.best_kappa);
+        W.MoveHalfwayToBest();
         looked_back = true;
         --iteration;
         continue;
