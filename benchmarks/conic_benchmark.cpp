@@ -71,6 +71,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
 #include <map>
 #include <random>
 #include <stdexcept>
@@ -78,6 +81,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "timeopt/conic/cbf.h"
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
 #include "../tests/common/random_socp.h"
@@ -279,4 +283,30 @@ BENCHMARK(BM_RandomSocp)->Arg(1000)->Arg(3000)->Arg(10000)->Arg(30000)->Arg(1000
 void BM_RandomSocpSlope(benchmark::State& state) { Slope(state, "random"); }
 BENCHMARK(BM_RandomSocpSlope)->Iterations(1);
 
+// Writes the temporal-shaped problems of BM_Temporal (250, 1,250 and 2,500 cells) as CBF files.
+int ExportCbf(const std::string& dir) {
+  for (const int cells : {250, 1250, 2500}) {
+    const std::string path = dir + "/conic_temporal_" + std::to_string(cells) + ".cbf";
+    std::ofstream out(path);
+    timeopt::conic::WriteCbf(TemporalProblem(cells, 1), out);
+    if (!out) {
+      std::cerr << "conic_benchmark: cannot write " << path << "\n";
+      return 1;
+    }
+    std::cout << path << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
+
+// `conic_benchmark --export-cbf DIR` writes the temporal-shaped problems for another conic solver
+// (benchmarks/ecos/compare_ecos.sh) instead of running the benchmarks.
+int main(int argc, char** argv) {
+  if (argc == 3 && std::strcmp(argv[1], "--export-cbf") == 0) return ExportCbf(argv[2]);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

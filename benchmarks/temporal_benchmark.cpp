@@ -4,14 +4,21 @@
 // vmax = 3 m/s, amax = 2 m/s^2 per axis, rest to rest, rho = 0, paper constraints; BM_SocpRho and
 // BM_IpoptRho the same at m = 10, K = 50 with rho = 0.1 and 1.
 // Run: ./build/temporal_benchmark --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// `temporal_benchmark --export-cbf DIR` instead writes the SOCPs of m = 10, K = 50 (rho = 0, 0.1 and
+// 1) as CBF files for another conic solver (benchmarks/ecos/compare_ecos.sh) and exits.
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
 #include <map>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/temporal/temporal_solver.h"
 
@@ -115,9 +122,25 @@ class SlopeReporter : public benchmark::ConsoleReporter {
   std::map<double, double> times_;
 };
 
+// Writes the SOCPs that BM_Socp/10/50 and BM_SocpRho solve.
+int ExportCbf(const std::string& dir) {
+  for (const double rho : {0.0, 0.1, 1.0}) {
+    const std::string path = dir + "/temporal_m10_K50_rho" + (rho == 0.0 ? "0" : rho == 0.1 ? "0.1" : "1") + ".cbf";
+    std::ofstream out(path);
+    conic::WriteCbf(BuildTemporalSocp(Discretize(MakeProblem(10, 50, ConstraintMode::kPaper, rho))), out);
+    if (!out) {
+      std::cerr << "temporal_benchmark: cannot write " << path << "\n";
+      return 1;
+    }
+    std::cout << path << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::strcmp(argv[1], "--export-cbf") == 0) return ExportCbf(argv[2]);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   SlopeReporter reporter;

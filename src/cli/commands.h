@@ -22,5 +22,6 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run);
 void RegisterWaypointsCommand(CLI::App& app, Runner& run);
 void RegisterMapCommand(CLI::App& app, Runner& run);
 void RegisterPlanCommand(CLI::App& app, Runner& run);
+void RegisterConicCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

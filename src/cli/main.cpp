@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   RegisterWaypointsCommand(app, run);
   RegisterMapCommand(app, run);
   RegisterPlanCommand(app, run);
+  RegisterConicCommand(app, run);
 
   try {
     app.parse(argc, argv);

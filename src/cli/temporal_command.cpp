@@ -1,5 +1,5 @@
 // `timeopt temporal PROBLEM.json [--solver socp|ipopt] [--output RESULT.json]
-//                   [--samples TRAJ.csv --rate HZ] [--plot PLOT.png]`
+//                   [--samples TRAJ.csv --rate HZ] [--plot PLOT.png] [--export-cbf SOCP.cbf]`
 // `timeopt waypoints WAYPOINTS.csv [--kind cubic|minjerk] [--max-velocity V] [--max-acceleration A]
 //                   [-K K] [--rho RHO] [--solver socp|ipopt] --out-dir DIR`
 
@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands.h"
+#include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/profile_plot.h"
@@ -41,7 +42,26 @@ struct TemporalArgs {
   std::string samples;
   double rate = 100.0;
   std::string plot;
+  std::string export_cbf;
 };
+
+// Writes the SOCP of `problem` (the one the socp backend solves) as CBF. Returns false, with a
+// message, when presolve has already decided the problem and there is no program to write.
+bool ExportSocp(const TemporalProblem& problem, const std::string& path, int* exit_code) {
+  const TemporalDiscretization d = Discretize(problem);
+  if (d.infeasible_reason || d.num_vars == 0) {
+    std::cerr << "timeopt: --export-cbf: no SOCP to write: "
+              << (d.infeasible_reason ? "presolve proves the problem infeasible (" + *d.infeasible_reason + ")"
+                                      : std::string("every speed on the grid is fixed by the boundary"))
+              << "\n";
+    *exit_code = d.infeasible_reason ? kExitInfeasible : kExitFailure;
+    return false;
+  }
+  std::ostringstream text;
+  conic::WriteCbf(BuildTemporalSocp(d), text);
+  WriteTextFile(path, text.str());
+  return true;
+}
 
 // Solves, writes the requested outputs and returns the exit code.
 int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
@@ -64,6 +84,8 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 
 int RunTemporal(const TemporalArgs& args) {
   const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+  int exit_code = kExitOk;
+  if (!args.export_cbf.empty() && !ExportSocp(problem, args.export_cbf, &exit_code)) return exit_code;
   return SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
 }
 
@@ -143,6 +165,9 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
+  sub->add_option("--export-cbf", args->export_cbf,
+                  "Also write the SOCP that --solver socp solves, in the Conic Benchmark Format (its "
+                  "optimal value is the result's objective), for another conic solver");
   sub->callback([args, &run] { run = [args] { return RunTemporal(*args); }; });
 }
 

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <initializer_list>
+#include <stdexcept>
 #include <vector>
 
 #include "timeopt/conic/problem_builder.h"
@@ -30,7 +31,16 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-conic::Problem BuildSocp(const TemporalDiscretization& d) {
+}  // namespace
+
+conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
+  if (d.infeasible_reason) {
+    throw std::invalid_argument("no SOCP to build: presolve proves the problem infeasible (" +
+                                *d.infeasible_reason + ")");
+  }
+  if (d.num_vars == 0) {
+    throw std::invalid_argument("no SOCP to build: every speed on the grid is fixed by the boundary");
+  }
   conic::ProblemBuilder builder;
   const int nx = d.num_vars;
   const int x0 = builder.AddVariables(nx);
@@ -127,6 +137,8 @@ conic::Problem BuildSocp(const TemporalDiscretization& d) {
   return builder.Build();
 }
 
+namespace {
+
 class SocpTemporalSolver final : public TemporalSolver {
  public:
   explicit SocpTemporalSolver(const SocpTemporalOptions& options) : options_(options) {
@@ -174,7 +186,7 @@ class SocpTemporalSolver final : public TemporalSolver {
       FinishOptimalResult(problem, d, x, &result);
       return result;
     }
-    const conic::Problem socp = BuildSocp(d);
+    const conic::Problem socp = BuildTemporalSocp(d);
     result.build_time_seconds = Seconds(start, Clock::now());
 
     const conic::Result r = solver_.Solve(socp);

@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -134,6 +135,56 @@ TEST_F(CliTest, TemporalExitCodes) {
   r = RunCli("temporal " + Path("nothing.json"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("nothing.json"));
+}
+
+// Reads the number after "key": in a JSON text (enough for the flat results of the CLI).
+double JsonNumber(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::nan("");
+  return std::stod(json.substr(at + key.size() + 3));
+}
+
+// examples/line_problem.json is a 10 m line, vmax 2, amax 1, rest to rest: T = L/v + v/a = 7 s in
+// closed form, and with rho = 0 the SOCP's optimal value is T. The exported file, read back and
+// solved by `timeopt conic`, must give it; 1e-7 is the solver's 1e-8 tolerances with room for T ~ 7.
+TEST_F(CliTest, TemporalExportsItsSocpAndConicSolvesItToTheClosedForm) {
+  CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json" +
+                    " --export-cbf " + Path("line.cbf") + " -o " + Path("r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NEAR(JsonNumber(ReadTextFile(Path("r.json")), "objective"), 7.0, 1e-7);
+  r = RunCli("conic " + Path("line.cbf") + " --repeat 3 -o " + Path("c.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string json = ReadTextFile(Path("c.json"));
+  EXPECT_THAT(json, HasSubstr("\"status\": \"optimal\""));
+  EXPECT_NEAR(JsonNumber(json, "objective"), 7.0, 1e-7) << json;
+  EXPECT_EQ(JsonNumber(json, "repeat"), 3.0);
+
+  // A start speed above vmax: presolve decides it, so there is no SOCP to write.
+  Write("fast.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0},
+    "boundary": {"start_velocity": [5, 0, 0]}, "discretization": {"K": 10}})");
+  r = RunCli("temporal " + Path("fast.json") + " --export-cbf " + Path("fast.cbf"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("--export-cbf: no SOCP to write: presolve proves the problem infeasible"));
+  EXPECT_FALSE(std::filesystem::exists(Path("fast.cbf")));
+}
+
+TEST_F(CliTest, ConicExitCodes) {
+  Write("bad.cbf", "VER\n3\nVAR\n2 1\nQ 3\n");
+  CliRun r = RunCli("conic " + Path("bad.cbf"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("CBF line 5: VAR cones add up to 3, not 2"));
+
+  // x >= 1 and -x >= 1.
+  Write("infeasible.cbf",
+        "VER\n3\nVAR\n1 1\nF 1\nCON\n2 1\nL+ 2\nACOORD\n2\n0 0 1\n1 0 -1\nBCOORD\n2\n0 -1\n1 -1\n");
+  r = RunCli("conic " + Path("infeasible.cbf") + " -o " + Path("i.json"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_THAT(ReadTextFile(Path("i.json")), HasSubstr("\"status\": \"primal_infeasible\""));
+
+  r = RunCli("conic " + Path("missing.cbf"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("missing.cbf"));
 }
 
 }  // namespace

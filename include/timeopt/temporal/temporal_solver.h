@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "timeopt/conic/problem.h"
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/temporal/temporal_profile.h"
@@ -82,6 +83,13 @@ struct IpoptTemporalOptions {
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);
+
+// The conic program the SOCP backend solves (see socp_backend.cpp for its variables and cones):
+// variables x (the discretization's free values), then c, d and, when rho > 0, t; its optimal value
+// is the objective J of the discretization. Exposed so that the same problem can be handed to another
+// conic solver, e.g. written with conic::WriteCbf. Throws std::invalid_argument when there is no
+// program to build: presolve already proved d infeasible, or every grid value is fixed.
+conic::Problem BuildTemporalSocp(const TemporalDiscretization& d);
 
 // Shared by the backends: fills total_time, objective, piece_durations, profile and the dense
 // feasibility ratios of an optimal result from the discretization's free values x.

@@ -1,0 +1,325 @@
+#include "timeopt/conic/cbf.h"
+
+#include <cmath>
+#include <istream>
+#include <limits>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "timeopt/conic/problem_builder.h"
+
+namespace timeopt::conic {
+namespace {
+
+// The domains of a block of variables or constraint rows.
+enum class Domain { kFree, kNonnegative, kNonpositive, kZero, kSoc, kRotated };
+
+struct Block {
+  Domain domain;
+  int dim;
+};
+
+// Lines of the file without comments and blank lines, each with its 1-based number for messages.
+class LineReader {
+ public:
+  explicit LineReader(std::istream& in) : in_(in) {}
+
+  // The next content line; false at the end of the input.
+  bool Next(std::string* line) {
+    while (std::getline(in_, *line)) {
+      ++number_;
+      if (!line->empty() && line->back() == '\r') line->pop_back();
+      const auto first = line->find_first_not_of(" \t");
+      if (first == std::string::npos || (*line)[first] == '#') continue;
+      return true;
+    }
+    return false;
+  }
+
+  // The next content line, split into whitespace-separated fields; throws at the end of the input.
+  std::vector<std::string> Fields(const std::string& what) {
+    std::string line;
+    if (!Next(&line)) Fail("the file ends where " + what + " was expected");
+    std::istringstream s(line);
+    std::vector<std::string> fields;
+    for (std::string f; s >> f;) fields.push_back(f);
+    return fields;
+  }
+
+  [[noreturn]] void Fail(const std::string& message) const {
+    throw std::invalid_argument("CBF line " + std::to_string(number_) + ": " + message);
+  }
+
+  long long Integer(const std::string& text, const std::string& what) const {
+    std::size_t used = 0;
+    long long v = 0;
+    try {
+      v = std::stoll(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size()) Fail(what + ": expected an integer, got '" + text + "'");
+    return v;
+  }
+
+  // An integer in [0, limit).
+  int Index(const std::string& text, long long limit, const std::string& what) const {
+    const long long v = Integer(text, what);
+    if (v < 0 || v >= limit) {
+      Fail(what + " " + text + " is out of range [0, " + std::to_string(limit) + ")");
+    }
+    return static_cast<int>(v);
+  }
+
+  // A count in [0, 2^31).
+  int Count(const std::string& text, const std::string& what) const {
+    return Index(text, std::numeric_limits<int>::max(), what);
+  }
+
+  double Real(const std::string& text, const std::string& what) const {
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+      v = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size()) Fail(what + ": expected a number, got '" + text + "'");
+    if (!std::isfinite(v)) Fail(what + " is not finite");
+    return v;
+  }
+
+  void ExpectFields(const std::vector<std::string>& f, std::size_t n, const std::string& what) const {
+    if (f.size() != n) {
+      Fail(what + ": expected " + std::to_string(n) + " fields, got " + std::to_string(f.size()));
+    }
+  }
+
+ private:
+  std::istream& in_;
+  int number_ = 0;
+};
+
+// "n k" followed by k lines "DOMAIN dim" whose dims add up to n.
+std::vector<Block> ReadBlocks(LineReader& reader, const std::string& keyword, int* total) {
+  const auto head = reader.Fields(keyword + " sizes");
+  reader.ExpectFields(head, 2, keyword);
+  *total = reader.Count(head[0], keyword + " size");
+  const int count = reader.Count(head[1], keyword + " number of cones");
+  std::vector<Block> blocks;
+  long long sum = 0;
+  for (int k = 0; k < count; ++k) {
+    const auto f = reader.Fields(keyword + " cone");
+    reader.ExpectFields(f, 2, keyword + " cone");
+    const std::string& name = f[0];
+    const int dim = reader.Count(f[1], keyword + " cone dimension");
+    Block b{Domain::kFree, dim};
+    if (name == "F") b.domain = Domain::kFree;
+    else if (name == "L+") b.domain = Domain::kNonnegative;
+    else if (name == "L-") b.domain = Domain::kNonpositive;
+    else if (name == "L=") b.domain = Domain::kZero;
+    else if (name == "Q") b.domain = Domain::kSoc;
+    else if (name == "QR") b.domain = Domain::kRotated;
+    else reader.Fail("cone '" + name + "' is not supported (supported: F, L+, L-, L=, Q, QR)");
+    if (b.domain == Domain::kSoc && dim < 1) reader.Fail("a Q cone needs dimension >= 1");
+    if (b.domain == Domain::kRotated && dim < 2) reader.Fail("a QR cone needs dimension >= 2");
+    sum += dim;
+    blocks.push_back(b);
+  }
+  if (sum != *total) {
+    reader.Fail(keyword + " cones add up to " + std::to_string(sum) + ", not " + std::to_string(*total));
+  }
+  return blocks;
+}
+
+// Adds "rows[i] in domain" for one block of affine rows.
+void AddBlock(const Block& block, std::vector<AffineExpr>& rows, ProblemBuilder& builder) {
+  switch (block.domain) {
+    case Domain::kFree:
+      return;
+    case Domain::kNonnegative:
+      for (const AffineExpr& e : rows) builder.AddNonnegative(e);
+      return;
+    case Domain::kNonpositive:
+      for (AffineExpr& e : rows) {
+        for (Term& t : e.terms) t.coef = -t.coef;
+        e.constant = -e.constant;
+        builder.AddNonnegative(e);
+      }
+      return;
+    case Domain::kZero:
+      for (const AffineExpr& e : rows) builder.AddEquality(e.terms, -e.constant);
+      return;
+    case Domain::kSoc:
+      builder.AddSecondOrderCone(rows);
+      return;
+    case Domain::kRotated:
+      builder.AddRotatedCone(rows);
+      return;
+  }
+}
+
+}  // namespace
+
+CbfModel ReadCbf(std::istream& in) {
+  LineReader reader(in);
+  CbfModel model;
+  bool have_version = false, have_var = false, have_con = false;
+  int n = 0, m = 0;
+  std::vector<Block> var_blocks, con_blocks;
+  std::vector<std::pair<int, double>> objective;
+  std::vector<std::vector<Term>> a_rows;
+  std::vector<double> b;
+
+  std::string line;
+  while (reader.Next(&line)) {
+    std::istringstream s(line);
+    std::string keyword, extra;
+    s >> keyword;
+    if (s >> extra) reader.Fail("expected a keyword alone on its line, got '" + line + "'");
+    if (!have_version && keyword != "VER") reader.Fail("the file must start with VER");
+    if (keyword == "VER") {
+      if (have_version) reader.Fail("VER given twice");
+      const auto f = reader.Fields("the version");
+      reader.ExpectFields(f, 1, "VER");
+      const long long v = reader.Integer(f[0], "VER");
+      if (v < 1 || v > 4) reader.Fail("CBF version " + f[0] + " is not supported (1 to 4 are)");
+      have_version = true;
+    } else if (keyword == "OBJSENSE") {
+      const auto f = reader.Fields("MIN or MAX");
+      reader.ExpectFields(f, 1, "OBJSENSE");
+      if (f[0] == "MAX") model.maximize = true;
+      else if (f[0] != "MIN") reader.Fail("OBJSENSE must be MIN or MAX, got '" + f[0] + "'");
+    } else if (keyword == "VAR") {
+      if (have_var) reader.Fail("VAR given twice");
+      var_blocks = ReadBlocks(reader, "VAR", &n);
+      have_var = true;
+    } else if (keyword == "CON") {
+      if (have_con) reader.Fail("CON given twice");
+      con_blocks = ReadBlocks(reader, "CON", &m);
+      a_rows.assign(static_cast<std::size_t>(m), {});
+      b.assign(static_cast<std::size_t>(m), 0.0);
+      have_con = true;
+    } else if (keyword == "OBJACOORD" || keyword == "ACOORD" || keyword == "BCOORD") {
+      if (!have_var) reader.Fail(keyword + " before VAR");
+      if (keyword != "OBJACOORD" && !have_con) reader.Fail(keyword + " before CON");
+      const auto head = reader.Fields(keyword + " count");
+      reader.ExpectFields(head, 1, keyword);
+      const int count = reader.Count(head[0], keyword + " count");
+      for (int k = 0; k < count; ++k) {
+        if (keyword == "OBJACOORD") {
+          const auto f = reader.Fields("an OBJACOORD entry");
+          reader.ExpectFields(f, 2, "OBJACOORD entry");
+          objective.push_back({reader.Index(f[0], n, "variable"), reader.Real(f[1], "coefficient")});
+        } else if (keyword == "ACOORD") {
+          const auto f = reader.Fields("an ACOORD entry");
+          reader.ExpectFields(f, 3, "ACOORD entry");
+          const int row = reader.Index(f[0], m, "constraint row");
+          const int col = reader.Index(f[1], n, "variable");
+          a_rows[static_cast<std::size_t>(row)].push_back({col, reader.Real(f[2], "coefficient")});
+        } else {
+          const auto f = reader.Fields("a BCOORD entry");
+          reader.ExpectFields(f, 2, "BCOORD entry");
+          const int row = reader.Index(f[0], m, "constraint row");
+          b[static_cast<std::size_t>(row)] += reader.Real(f[1], "constant");
+        }
+      }
+    } else if (keyword == "OBJBCOORD") {
+      const auto f = reader.Fields("the objective constant");
+      reader.ExpectFields(f, 1, "OBJBCOORD");
+      model.objective_constant = reader.Real(f[0], "objective constant");
+    } else if (keyword == "INT" || keyword == "PSDVAR" || keyword == "PSDCON" || keyword == "FCOORD" ||
+               keyword == "HCOORD" || keyword == "DCOORD" || keyword == "OBJFCOORD" ||
+               keyword == "POWCONES" || keyword == "POW*CONES" || keyword == "CHANGE") {
+      reader.Fail(keyword + " is not supported: the solver handles continuous problems over linear, "
+                  "second-order and rotated second-order cones only");
+    } else {
+      reader.Fail("unknown keyword '" + keyword + "'");
+    }
+  }
+  if (!have_version) throw std::invalid_argument("CBF: the input is empty (no VER)");
+  if (!have_var) throw std::invalid_argument("CBF: no VAR section");
+
+  ProblemBuilder builder;
+  builder.AddVariables(n);
+  for (const auto& [var, coef] : objective) {
+    builder.SetObjectiveCoefficient(var, model.maximize ? -coef : coef);
+  }
+  int first = 0;
+  std::vector<AffineExpr> rows;
+  for (const Block& block : var_blocks) {
+    rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
+    for (int i = 0; i < block.dim; ++i) rows[static_cast<std::size_t>(i)].terms.push_back({first + i, 1.0});
+    AddBlock(block, rows, builder);
+    first += block.dim;
+  }
+  first = 0;
+  for (const Block& block : con_blocks) {
+    rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
+    for (int i = 0; i < block.dim; ++i) {
+      const auto r = static_cast<std::size_t>(first + i);
+      rows[static_cast<std::size_t>(i)] = AffineExpr{a_rows[r], b[r]};
+    }
+    AddBlock(block, rows, builder);
+    first += block.dim;
+  }
+  model.problem = builder.Build();
+  return model;
+}
+
+void WriteCbf(const Problem& problem, std::ostream& out) {
+  problem.Validate();
+  const int n = problem.num_variables(), p = problem.num_equalities(), m = problem.num_cone_rows();
+  const ConeSpec& k = problem.cones;
+  const auto precision = out.precision(17);
+
+  out << "# timeopt: the first " << p << " rows are A x - b (L=), the other " << m << " are h - G x\n"
+      << "VER\n3\n\nOBJSENSE\nMIN\n\nVAR\n" << n << " " << (n > 0 ? 1 : 0) << "\n";
+  if (n > 0) out << "F " << n << "\n";
+
+  const int blocks = (p > 0 ? 1 : 0) + (k.num_nonnegative > 0 ? 1 : 0) +
+                     static_cast<int>(k.soc_dims.size() + k.rotated_dims.size());
+  out << "\nCON\n" << p + m << " " << blocks << "\n";
+  if (p > 0) out << "L= " << p << "\n";
+  if (k.num_nonnegative > 0) out << "L+ " << k.num_nonnegative << "\n";
+  for (int d : k.soc_dims) out << "Q " << d << "\n";
+  for (int d : k.rotated_dims) out << "QR " << d << "\n";
+
+  int nonzero_c = 0;
+  for (int j = 0; j < n; ++j) nonzero_c += problem.c[j] != 0.0 ? 1 : 0;
+  out << "\nOBJACOORD\n" << nonzero_c << "\n";
+  for (int j = 0; j < n; ++j) {
+    if (problem.c[j] != 0.0) out << j << " " << problem.c[j] << "\n";
+  }
+
+  out << "\nACOORD\n" << problem.A.nonZeros() + problem.G.nonZeros() << "\n";
+  for (int j = 0; j < problem.A.outerSize(); ++j) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(problem.A, j); it; ++it) {
+      out << it.row() << " " << j << " " << it.value() << "\n";
+    }
+  }
+  for (int j = 0; j < problem.G.outerSize(); ++j) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(problem.G, j); it; ++it) {
+      out << p + it.row() << " " << j << " " << -it.value() << "\n";
+    }
+  }
+
+  int nonzero_b = 0;
+  for (int i = 0; i < p; ++i) nonzero_b += problem.b[i] != 0.0 ? 1 : 0;
+  for (int i = 0; i < m; ++i) nonzero_b += problem.h[i] != 0.0 ? 1 : 0;
+  out << "\nBCOORD\n" << nonzero_b << "\n";
+  for (int i = 0; i < p; ++i) {
+    if (problem.b[i] != 0.0) out << i << " " << -problem.b[i] << "\n";
+  }
+  for (int i = 0; i < m; ++i) {
+    if (problem.h[i] != 0.0) out << p + i << " " << problem.h[i] << "\n";
+  }
+  out.precision(precision);
+  if (!out) throw std::runtime_error("CBF: writing failed");
+}
+
+}  // namespace timeopt::conic
