@@ -19,6 +19,7 @@ trap 'rm -rf "$dir"' EXIT
 "$build/conic_benchmark" --export-cbf "$dir" >/dev/null
 printf '%-30s %8s %6s %10s %18s | %6s %10s %18s %s\n' problem vars its ms objective ecos_its ecos_ms ecos_objective ecos_status
 for f in "$dir"/temporal_*.cbf "$dir"/conic_temporal_*.cbf; do
+  rm -f "$dir/ours.json" "$dir/ecos.json"
   "$build/timeopt" conic "$f" --repeat "$repeat" --output "$dir/ours.json" || true
   Rscript "$here/ecos_cbf.R" --repeat "$(( (repeat + 2) / 3 ))" "$f" > "$dir/ecos.json"
   python3 - "$f" "$dir/ours.json" "$dir/ecos.json" <<'PY'

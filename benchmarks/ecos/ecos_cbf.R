@@ -20,11 +20,11 @@ read_cbf <- function(path) {
     } else if (key == "OBJSENSE") { sense <- if (lines[i + 1] == "MAX") -1 else 1; i <- i + 2
     } else if (key == "VAR") {
       h <- nums(i + 1); n <- h[1]
-      for (k in seq_len(h[2])) if (strsplit(lines[i + 1 + k], " ")[[1]][1] != "F") stop("only free variables")
+      for (k in seq_len(h[2])) if (strsplit(lines[i + 1 + k], "[[:space:]]+")[[1]][1] != "F") stop("only free variables")
       i <- i + 2 + h[2]
     } else if (key == "CON") {
       h <- nums(i + 1); m <- h[1]
-      parts <- strsplit(lines[(i + 2):(i + 1 + h[2])], "[[:space:]]+")
+      parts <- strsplit(lines[i + 1 + seq_len(h[2])], "[[:space:]]+")
       blocks <- data.frame(type = sapply(parts, `[`, 1), dim = as.integer(sapply(parts, `[`, 2)))
       i <- i + 2 + h[2]
     } else if (key %in% c("OBJACOORD", "ACOORD", "BCOORD")) {

@@ -42,7 +42,10 @@ int RunConic(const ConicArgs& args) {
   nlohmann::ordered_json json;
   json["status"] = conic::ToString(result.status);
   json["message"] = result.message;
-  json["objective"] = model.FileObjective(result.primal_objective);
+  // Only an optimal solve has an objective value; otherwise x is a certificate or an unconverged
+  // iterate.
+  if (result.is_success()) json["objective"] = model.FileObjective(result.primal_objective);
+  else json["objective"] = nullptr;
   json["iterations"] = result.iterations;
   json["solve_time_ms"] = times[times.size() / 2] * 1e3;
   json["repeat"] = args.repeat;

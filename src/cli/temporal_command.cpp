@@ -45,22 +45,19 @@ struct TemporalArgs {
   std::string export_cbf;
 };
 
-// Writes the SOCP of `problem` (the one the socp backend solves) as CBF. Returns false, with a
-// message, when presolve has already decided the problem and there is no program to write.
-bool ExportSocp(const TemporalProblem& problem, const std::string& path, int* exit_code) {
-  const TemporalDiscretization d = Discretize(problem);
-  if (d.infeasible_reason || d.num_vars == 0) {
-    std::cerr << "timeopt: --export-cbf: no SOCP to write: "
-              << (d.infeasible_reason ? "presolve proves the problem infeasible (" + *d.infeasible_reason + ")"
-                                      : std::string("every speed on the grid is fixed by the boundary"))
-              << "\n";
-    *exit_code = d.infeasible_reason ? kExitInfeasible : kExitFailure;
-    return false;
+// Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
+// decided the problem there is no program to write: a warning, and the solve's exit code stands.
+void ExportSocp(const TemporalProblem& problem, const std::string& path) {
+  conic::Problem socp;
+  try {
+    socp = BuildTemporalSocp(Discretize(problem));
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "timeopt: --export-cbf: nothing written: " << e.what() << "\n";
+    return;
   }
   std::ostringstream text;
-  conic::WriteCbf(BuildTemporalSocp(d), text);
+  conic::WriteCbf(socp, text);
   WriteTextFile(path, text.str());
-  return true;
 }
 
 // Solves, writes the requested outputs and returns the exit code.
@@ -84,9 +81,9 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 
 int RunTemporal(const TemporalArgs& args) {
   const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
-  int exit_code = kExitOk;
-  if (!args.export_cbf.empty() && !ExportSocp(problem, args.export_cbf, &exit_code)) return exit_code;
-  return SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
+  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
+  if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
+  return exit_code;
 }
 
 struct WaypointsArgs {

@@ -1,8 +1,11 @@
 #include "timeopt/conic/cbf.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <locale>
+#include <set>
 #include <istream>
-#include <limits>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +17,10 @@
 
 namespace timeopt::conic {
 namespace {
+
+// Largest number of variables, rows or entries a file may declare. Sizes are allocated before the
+// data is read, so an absurd declaration in a tiny file would otherwise exhaust memory.
+constexpr int kMaxSize = 100'000'000;
 
 // The domains of a block of variables or constraint rows.
 enum class Domain { kFree, kNonnegative, kNonpositive, kZero, kSoc, kRotated };
@@ -75,21 +82,21 @@ class LineReader {
     return static_cast<int>(v);
   }
 
-  // A count in [0, 2^31).
+  // A size or count in [0, kMaxSize].
   int Count(const std::string& text, const std::string& what) const {
-    return Index(text, std::numeric_limits<int>::max(), what);
+    return Index(text, kMaxSize + 1LL, what);
   }
 
   double Real(const std::string& text, const std::string& what) const {
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
+    // strtod, not stod: stod rejects subnormal values (ERANGE on underflow), which WriteCbf writes.
+    const char* begin = text.c_str();
+    char* end = nullptr;
+    errno = 0;
+    const double v = std::strtod(begin, &end);
+    if (end == begin || *end != '\0') Fail(what + ": expected a number, got '" + text + "'");
+    if (!std::isfinite(v)) {
+      Fail(what + " " + (errno == ERANGE ? "'" + text + "' is out of the range of a double" : "is not finite"));
     }
-    if (used != text.size()) Fail(what + ": expected a number, got '" + text + "'");
-    if (!std::isfinite(v)) Fail(what + " is not finite");
     return v;
   }
 
@@ -118,13 +125,21 @@ std::vector<Block> ReadBlocks(LineReader& reader, const std::string& keyword, in
     const std::string& name = f[0];
     const int dim = reader.Count(f[1], keyword + " cone dimension");
     Block b{Domain::kFree, dim};
-    if (name == "F") b.domain = Domain::kFree;
-    else if (name == "L+") b.domain = Domain::kNonnegative;
-    else if (name == "L-") b.domain = Domain::kNonpositive;
-    else if (name == "L=") b.domain = Domain::kZero;
-    else if (name == "Q") b.domain = Domain::kSoc;
-    else if (name == "QR") b.domain = Domain::kRotated;
-    else reader.Fail("cone '" + name + "' is not supported (supported: F, L+, L-, L=, Q, QR)");
+    if (name == "F") {
+      b.domain = Domain::kFree;
+    } else if (name == "L+") {
+      b.domain = Domain::kNonnegative;
+    } else if (name == "L-") {
+      b.domain = Domain::kNonpositive;
+    } else if (name == "L=") {
+      b.domain = Domain::kZero;
+    } else if (name == "Q") {
+      b.domain = Domain::kSoc;
+    } else if (name == "QR") {
+      b.domain = Domain::kRotated;
+    } else {
+      reader.Fail("cone '" + name + "' is not supported (supported: F, L+, L-, L=, Q, QR)");
+    }
     if (b.domain == Domain::kSoc && dim < 1) reader.Fail("a Q cone needs dimension >= 1");
     if (b.domain == Domain::kRotated && dim < 2) reader.Fail("a QR cone needs dimension >= 2");
     sum += dim;
@@ -169,6 +184,7 @@ CbfModel ReadCbf(std::istream& in) {
   LineReader reader(in);
   CbfModel model;
   bool have_version = false, have_var = false, have_con = false;
+  std::set<std::string> seen;
   int n = 0, m = 0;
   std::vector<Block> var_blocks, con_blocks;
   std::vector<std::pair<int, double>> objective;
@@ -182,8 +198,8 @@ CbfModel ReadCbf(std::istream& in) {
     s >> keyword;
     if (s >> extra) reader.Fail("expected a keyword alone on its line, got '" + line + "'");
     if (!have_version && keyword != "VER") reader.Fail("the file must start with VER");
+    if (!seen.insert(keyword).second) reader.Fail(keyword + " given twice");
     if (keyword == "VER") {
-      if (have_version) reader.Fail("VER given twice");
       const auto f = reader.Fields("the version");
       reader.ExpectFields(f, 1, "VER");
       const long long v = reader.Integer(f[0], "VER");
@@ -192,14 +208,12 @@ CbfModel ReadCbf(std::istream& in) {
     } else if (keyword == "OBJSENSE") {
       const auto f = reader.Fields("MIN or MAX");
       reader.ExpectFields(f, 1, "OBJSENSE");
-      if (f[0] == "MAX") model.maximize = true;
-      else if (f[0] != "MIN") reader.Fail("OBJSENSE must be MIN or MAX, got '" + f[0] + "'");
+      if (f[0] != "MIN" && f[0] != "MAX") reader.Fail("OBJSENSE must be MIN or MAX, got '" + f[0] + "'");
+      model.maximize = f[0] == "MAX";
     } else if (keyword == "VAR") {
-      if (have_var) reader.Fail("VAR given twice");
       var_blocks = ReadBlocks(reader, "VAR", &n);
       have_var = true;
     } else if (keyword == "CON") {
-      if (have_con) reader.Fail("CON given twice");
       con_blocks = ReadBlocks(reader, "CON", &m);
       a_rows.assign(static_cast<std::size_t>(m), {});
       b.assign(static_cast<std::size_t>(m), 0.0);
@@ -252,6 +266,10 @@ CbfModel ReadCbf(std::istream& in) {
   int first = 0;
   std::vector<AffineExpr> rows;
   for (const Block& block : var_blocks) {
+    if (block.domain == Domain::kFree) {
+      first += block.dim;
+      continue;
+    }
     rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
     for (int i = 0; i < block.dim; ++i) rows[static_cast<std::size_t>(i)].terms.push_back({first + i, 1.0});
     AddBlock(block, rows, builder);
@@ -259,6 +277,10 @@ CbfModel ReadCbf(std::istream& in) {
   }
   first = 0;
   for (const Block& block : con_blocks) {
+    if (block.domain == Domain::kFree) {
+      first += block.dim;
+      continue;
+    }
     rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
     for (int i = 0; i < block.dim; ++i) {
       const auto r = static_cast<std::size_t>(first + i);
@@ -268,14 +290,23 @@ CbfModel ReadCbf(std::istream& in) {
     first += block.dim;
   }
   model.problem = builder.Build();
+  try {
+    model.problem.Validate();  // repeated entries are summed, and a sum can overflow
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("CBF: ") + e.what());
+  }
   return model;
 }
 
-void WriteCbf(const Problem& problem, std::ostream& out) {
+void WriteCbf(const Problem& problem, std::ostream& destination) {
   problem.Validate();
   const int n = problem.num_variables(), p = problem.num_equalities(), m = problem.num_cone_rows();
   const ConeSpec& k = problem.cones;
-  const auto precision = out.precision(17);
+  // Formatted here, not in the caller's stream, whose flags (std::fixed) or locale (digit grouping)
+  // would change the numbers.
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out.precision(17);
 
   out << "# timeopt: the first " << p << " rows are A x - b (L=), the other " << m << " are h - G x\n"
       << "VER\n3\n\nOBJSENSE\nMIN\n\nVAR\n" << n << " " << (n > 0 ? 1 : 0) << "\n";
@@ -318,8 +349,8 @@ void WriteCbf(const Problem& problem, std::ostream& out) {
   for (int i = 0; i < m; ++i) {
     if (problem.h[i] != 0.0) out << p + i << " " << problem.h[i] << "\n";
   }
-  out.precision(precision);
-  if (!out) throw std::runtime_error("CBF: writing failed");
+  destination << out.str();
+  if (!destination) throw std::runtime_error("CBF: writing failed");
 }
 
 }  // namespace timeopt::conic

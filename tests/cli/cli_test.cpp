@@ -159,13 +159,15 @@ TEST_F(CliTest, TemporalExportsItsSocpAndConicSolvesItToTheClosedForm) {
   EXPECT_NEAR(JsonNumber(json, "objective"), 7.0, 1e-7) << json;
   EXPECT_EQ(JsonNumber(json, "repeat"), 3.0);
 
-  // A start speed above vmax: presolve decides it, so there is no SOCP to write.
+  // A start speed above vmax: presolve decides it, so there is no SOCP to write; the result is still
+  // written and the exit code is the solve's.
   Write("fast.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
     "limits": {"max_velocity": 2.0, "max_acceleration": 1.0},
     "boundary": {"start_velocity": [5, 0, 0]}, "discretization": {"K": 10}})");
-  r = RunCli("temporal " + Path("fast.json") + " --export-cbf " + Path("fast.cbf"));
+  r = RunCli("temporal " + Path("fast.json") + " --export-cbf " + Path("fast.cbf") + " -o " + Path("f.json"));
   EXPECT_EQ(r.exit_code, 3) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("--export-cbf: no SOCP to write: presolve proves the problem infeasible"));
+  EXPECT_THAT(r.output, HasSubstr("--export-cbf: nothing written: no SOCP to build: presolve proves"));
+  EXPECT_THAT(ReadTextFile(Path("f.json")), HasSubstr("\"status\": \"infeasible\""));
   EXPECT_FALSE(std::filesystem::exists(Path("fast.cbf")));
 }
 
@@ -180,7 +182,9 @@ TEST_F(CliTest, ConicExitCodes) {
         "VER\n3\nVAR\n1 1\nF 1\nCON\n2 1\nL+ 2\nACOORD\n2\n0 0 1\n1 0 -1\nBCOORD\n2\n0 -1\n1 -1\n");
   r = RunCli("conic " + Path("infeasible.cbf") + " -o " + Path("i.json"));
   EXPECT_EQ(r.exit_code, 3) << r.output;
-  EXPECT_THAT(ReadTextFile(Path("i.json")), HasSubstr("\"status\": \"primal_infeasible\""));
+  const std::string json = ReadTextFile(Path("i.json"));
+  EXPECT_THAT(json, HasSubstr("\"status\": \"primal_infeasible\""));
+  EXPECT_THAT(json, HasSubstr("\"objective\": null"));
 
   r = RunCli("conic " + Path("missing.cbf"));
   EXPECT_EQ(r.exit_code, 2);

@@ -53,6 +53,7 @@ TEST(Cbf, WriteThenReadGivesTheSameNumbersBitForBit) {
   builder.SetObjectiveCoefficient(1, 1.0 / 3.0);
   builder.AddEquality({{0, std::sqrt(2.0)}, {3, -1e-300}}, std::acos(-1.0));
   builder.AddLessEqual({{2, 0.1}}, 7e22);
+  builder.AddLessEqual({{1, 4.9e-324}}, 2.2250738585072009e-308);  // subnormal numbers
   builder.AddRotatedCone({AffineExpr{{{0, 1.0}}, 0.0}, AffineExpr{{{1, 2.0}}, 0.5}});
   builder.AddSecondOrderCone({AffineExpr{{{3, 1.0}}, 1.0}, AffineExpr{{{0, -1.0}}, 0.0},
                               AffineExpr{{}, 2.0}});
@@ -69,8 +70,9 @@ TEST(Cbf, WriteThenReadGivesTheSameNumbersBitForBit) {
   }
 }
 
-// maximize 5 - x0 + x3 with x1 = 2, x2 = 3, 2 x0 x1 >= x2^2, x3 <= 0 (a variable domain), and two
-// rows that do not bind: x0 - 1 >= 0 and |x0 - 2| <= 4. The optimum is x0 = 9/4, x3 = 0, value
+// maximize 5 - x0 + x3 with x1 = 2, x2 = 3, 2 x0 x1 >= x2^2, x3 <= 0 (a variable domain), and three
+// rows that do not bind: x0 - 1 >= 0, |x0 - 2| <= 4 and x0 - 10 <= 0 (each would bind, or make the
+// problem infeasible, with the wrong sign). The optimum is x0 = 9/4, x3 = 0, value
 // 5 - 9/4 = 2.75 exactly; 1e-7 is the solver's tolerance of 1e-8 with room for the 1/x0 scaling.
 TEST(Cbf, ReadsDomainsSenseAndConstantAndSolvesToTheClosedForm) {
   const std::string text = R"(# a comment
@@ -86,11 +88,12 @@ F 3
 L- 1
 
 CON
-8 4
+9 5
 L= 2
 QR 3
 L+ 1
 Q 2
+L- 1
 
 OBJACOORD
 2
@@ -101,7 +104,7 @@ OBJBCOORD
 5
 
 ACOORD
-7
+8
 0 1 1
 1 2 1
 2 0 1
@@ -109,23 +112,26 @@ ACOORD
 4 2 1
 5 0 1
 7 0 1
+8 0 1
 
 BCOORD
-5
+6
 0 -2
 1 -3
 5 -1
 6 4
 7 -2
+8 -10
 )";
   const CbfModel model = Read(text);
   EXPECT_TRUE(model.maximize);
   EXPECT_EQ(model.objective_constant, 5.0);
   EXPECT_EQ(model.problem.num_variables(), 4);
   EXPECT_EQ(model.problem.num_equalities(), 2);
-  EXPECT_EQ(model.problem.cones.num_nonnegative, 2);  // L+ row and the L- variable
+  EXPECT_EQ(model.problem.cones.num_nonnegative, 3);  // the L+ and L- rows and the L- variable
   const Result r = Solver().Solve(model.problem);
   ASSERT_EQ(r.status, Status::kOptimal) << r.message;
+  EXPECT_FALSE(r.reduced_accuracy);
   EXPECT_NEAR(model.FileObjective(r.primal_objective), 2.75, 1e-7);
   EXPECT_NEAR(r.x[0], 2.25, 1e-7);
   EXPECT_NEAR(r.x[3], 0.0, 1e-7);
@@ -149,6 +155,11 @@ TEST(Cbf, RejectsWhatItCannotReadNamingTheLine) {
   ExpectReadError(head + "CON\n1 1\nQR 1\n", "a QR cone needs dimension >= 2");
   ExpectReadError(head + "CON\n1 1\nL+ 1\nACOORD\n1\n1 0 1\n", "constraint row 1 is out of range [0, 1)");
   ExpectReadError(head + "OBJSENSE\nUP\n", "OBJSENSE must be MIN or MAX");
+  ExpectReadError(head + "OBJSENSE\nMAX\nOBJSENSE\nMIN\n", "CBF line 8: OBJSENSE given twice");
+  ExpectReadError(head + "OBJACOORD\n1\n0 1\nOBJACOORD\n1\n0 1\n", "OBJACOORD given twice");
+  ExpectReadError(head + "OBJACOORD\n2\n0 1e308\n0 1e308\n", "CBF: c has Inf at 0");
+  ExpectReadError(head + "OBJACOORD\n1\n0 1e400\n", "'1e400' is out of the range of a double");
+  ExpectReadError("VER\n3\nVAR\n2000000000 1\nF 2000000000\n", "VAR size 2000000000 is out of range");
   ExpectReadError("VER\n3\nVAR\n-1 0\n", "VAR size -1 is out of range");
 }
 
