@@ -2,6 +2,7 @@
 
 // Convenience header: the whole public API of timeopt.
 
+#include "timeopt/conic/cbf.h"
 #include "timeopt/conic/problem.h"
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
@@ -24,6 +25,7 @@
 #include "timeopt/spatial/plan_plot.h"
 #include "timeopt/spatial/planner.h"
 #include "timeopt/spatial/spatial_optimizer.h"
+#include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/temporal/temporal_profile.h"

@@ -23,5 +23,6 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run);
 void RegisterMapCommand(CLI::App& app, Runner& run);
 void RegisterPlanCommand(CLI::App& app, Runner& run);
 void RegisterConicCommand(CLI::App& app, Runner& run);
+void RegisterSimulateCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   RegisterMapCommand(app, run);
   RegisterPlanCommand(app, run);
   RegisterConicCommand(app, run);
+  RegisterSimulateCommand(app, run);
 
   try {
     app.parse(argc, argv);

@@ -16,6 +16,7 @@
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
+#include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 
@@ -127,6 +128,8 @@ int RunWaypoints(const WaypointsArgs& args) {
   const Trajectory trajectory(problem.curve, result.profile);
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
   WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
+  const QuadrotorSim sim;
+  const FeasibilityReport flight = sim.Run(trajectory, problem.limits);
 
   std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
@@ -139,6 +142,10 @@ int RunWaypoints(const WaypointsArgs& args) {
             << "total_time: " << result.total_time << " s\n"
             << "max |v|/vmax along the trajectory: " << result.max_velocity_ratio
             << ", max |a|/amax: " << result.max_acceleration_ratio << "\n"
+            << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth
+            << " rad/s, 1 kHz): max |v|/vmax " << flight.max_velocity_ratio << ", max |a|/amax "
+            << flight.max_acceleration_ratio << " (" << (flight.feasible ? "limits hold" : "limits exceeded")
+            << "; see `timeopt simulate`)\n"
             << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
             << ", " << (dir / "samples.csv").string() << ", " << (dir / "profile.png").string()
             << "\n";

@@ -191,5 +191,34 @@ TEST_F(CliTest, ConicExitCodes) {
   EXPECT_THAT(r.output, HasSubstr("missing.cbf"));
 }
 
+// The contract line: its time-optimal acceleration jumps by amax where cruise ends, which a
+// jerk-input vehicle overshoots (tests/sim has the closed forms); bounding the acceleration change
+// per cell (lambda_a = 0.05 m/s^2) removes the overshoot at the price of a longer flight.
+TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
+  const std::string line = std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json";
+  CliRun r = RunCli("simulate " + line + " -o " + Path("s.json") + " --states " + Path("s.csv"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("limit exceeded in simulation: |v_x| reaches 1.01"));
+  std::string json = ReadTextFile(Path("s.json"));
+  EXPECT_THAT(json, HasSubstr("\"feasible\": false"));
+  EXPECT_NEAR(JsonNumber(json, "max_acceleration_ratio"), 1.21, 0.01);  // 1.206 + zero-order hold at 1 kHz
+  const std::string csv = ReadTextFile(Path("s.csv"));
+  EXPECT_EQ(csv.rfind("t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz,ex,ey,ez\n", 0), 0u);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 8001 + 1);  // 7 s + 1 s at 1 kHz, and the end
+
+  Write("lambda.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0, "max_acceleration_change": 0.05},
+    "discretization": {"K": 50}})");
+  r = RunCli("simulate " + Path("lambda.json") + " -o " + Path("l.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  json = ReadTextFile(Path("l.json"));
+  EXPECT_THAT(json, HasSubstr("\"feasible\": true"));
+  EXPECT_GT(JsonNumber(json, "total_time"), 7.0);
+
+  r = RunCli("simulate " + line + " --control-rate 50");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("bandwidth * time_step must be <= 0.1"));
+}
+
 }  // namespace
 }  // namespace timeopt

@@ -1,0 +1,124 @@
+#pragma once
+// Verification by simulation: a jerk-input quadrotor (a triple integrator per axis, the flat model
+// of a multirotor whose thrust and body rates are fast) flies a reference trajectory under feedback
+// and the report says whether every velocity, acceleration and jerk limit held at every instant of
+// the flight, not only at grid points.
+//
+// Model and controller, per axis:
+//   p' = v,  v' = a,  a' = u,
+//   u = j_ref + k_a (a_ref - a) + k_v (v_ref - v) + k_p (p_ref - p),
+// with the gains that put the three poles of the tracking error at -bandwidth (k_a = 3 w,
+// k_v = 3 w^2, k_p = w^3: critically damped, no oscillation). The controller runs at a fixed rate:
+// u is computed from the reference at the start of each step and held over the step (zero-order
+// hold), optionally clipped to a jerk limit. Within a step a is linear and v quadratic in time, so
+// their largest magnitudes over the step are found exactly (ends and the vertex of v), and the
+// integration is exact: no error is added between steps.
+//
+// What it reveals: the temporal stage's profile has a constant sddot per cell, so the reference
+// acceleration jumps between cells and at the ends of cruise phases. A vehicle with finite jerk cannot
+// follow a jump; with these gains its acceleration overshoots a jump of size D by 0.206 D (and its
+// velocity by 0.023 D at bandwidth 10 rad/s, 0.23 D / bandwidth). The acceleration-change bound lambda_a of the temporal problem
+// (TemporalLimits::max_acceleration_change) limits the jumps and therefore the overshoot.
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/trajectory/trajectory.h"
+
+namespace timeopt {
+
+struct QuadrotorSimOptions {
+  /// Controller period, s: the jerk command is held constant over each step. 1e-3 (1 kHz, a typical
+  /// attitude-loop rate). Must be > 0 and bandwidth * time_step <= 0.1.
+  double time_step = 1e-3;
+  /// Closed-loop bandwidth w of the tracking error, rad/s: all three poles at -w. 10.
+  double bandwidth = 10.0;
+  /// Flight time after the reference ends (see QuadrotorSim::Run), s, so that
+  /// the transient of the last acceleration jump is included. 1.0 (10 time constants at w = 10).
+  double settle_time = 1.0;
+  /// Per-axis jerk limit of the vehicle, m/s^3; commands are clipped to it. Absent: no limit.
+  std::optional<Eigen::Vector3d> max_jerk;
+  /// Initial state minus the reference's initial state (position m, velocity m/s, acceleration
+  /// m/s^2). Zero by default: the vehicle starts on the reference.
+  Eigen::Vector3d initial_position_error = Eigen::Vector3d::Zero();
+  Eigen::Vector3d initial_velocity_error = Eigen::Vector3d::Zero();
+  Eigen::Vector3d initial_acceleration_error = Eigen::Vector3d::Zero();
+  /// Relative slack of the verdict: a limit holds if |value| <= limit (1 + limit_tolerance). 1e-9,
+  /// for rounding.
+  double limit_tolerance = 1e-9;
+  /// Keep the state at every step in FeasibilityReport::states. False.
+  bool record_states = false;
+
+  /// False, with a message naming the first bad setting, if any setting is out of range.
+  bool IsValid(std::string* error) const;
+};
+
+/// The simulated vehicle's state at the start of one controller step.
+struct SimState {
+  double t = 0.0;                                          ///< s
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();      ///< m
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      ///< m/s
+  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  ///< m/s^2
+  Eigen::Vector3d jerk = Eigen::Vector3d::Zero();          ///< command held over the step, m/s^3
+  Eigen::Vector3d position_error = Eigen::Vector3d::Zero();  ///< position - reference position, m
+};
+
+struct FeasibilityReport {
+  /// True iff the largest velocity and acceleration ratios are <= 1 + limit_tolerance. (A jerk
+  /// limit is the vehicle's: commands are clipped to it, so it always holds; see clipped_steps.)
+  bool feasible = false;
+  /// The failed limits with their largest ratio, axis and time, or "velocity and acceleration
+  /// limits hold"; and how many steps clipped the jerk, if any did.
+  std::string message;
+  /// Largest |v_axis(t)| / max_velocity(axis) over the whole flight (exact between steps), and when.
+  double max_velocity_ratio = 0.0;
+  double max_velocity_time = 0.0;
+  /// Largest |a_axis(t)| / max_acceleration(axis) over the whole flight (exact), and when.
+  double max_acceleration_ratio = 0.0;
+  double max_acceleration_time = 0.0;
+  /// Largest |u_axis| / max_jerk(axis) before clipping (> 1 means the jerk limit clipped a command);
+  /// 0 without a jerk limit. Largest |u_axis| applied, m/s^3.
+  double max_jerk_ratio = 0.0;
+  double max_jerk = 0.0;
+  /// Steps in which some axis was clipped to the jerk limit.
+  int clipped_steps = 0;
+  /// Largest ||position - reference position|| at the step boundaries, m, and when.
+  double max_position_error = 0.0;
+  double max_position_error_time = 0.0;
+  /// ||position - reference position|| at the end of the settle time, m.
+  double final_position_error = 0.0;
+  int steps = 0;
+  /// Every step's starting state and the final state, if QuadrotorSimOptions::record_states.
+  std::vector<SimState> states;
+};
+
+class QuadrotorSim {
+ public:
+  using Options = QuadrotorSimOptions;
+  /// The reference: position, velocity, acceleration and jerk at time t (t in [0, duration]).
+  using Reference = std::function<TrajectoryState(double t)>;
+
+  /// Throws std::invalid_argument with IsValid's message if the options are invalid.
+  explicit QuadrotorSim(const Options& options = Options());
+
+  /// Flies `reference` for duration() s plus the settle time and checks `limits`'
+  /// velocity and acceleration. After the reference ends, it continues at its final velocity with
+  /// zero acceleration (a hover for rest-to-rest trajectories). Throws std::invalid_argument if the
+  /// limits are not positive and finite or the flight would take more than 1e8 steps.
+  FeasibilityReport Run(const Trajectory& reference, const TemporalLimits& limits) const;
+
+  /// The same for a reference given as a function on [0, duration] (duration >= 0).
+  FeasibilityReport Run(const Reference& reference, double duration, const TemporalLimits& limits) const;
+
+  const Options& options() const { return options_; }
+
+ private:
+  Options options_;
+};
+
+}  // namespace timeopt

@@ -1,0 +1,194 @@
+#include "timeopt/sim/quadrotor_sim.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace timeopt {
+namespace {
+
+// Longest flight, in controller steps.
+constexpr double kMaxSteps = 1e8;
+
+bool PositiveFinite(const Eigen::Vector3d& v) {
+  return v.allFinite() && (v.array() > 0.0).all();
+}
+
+// Largest |v(tau)| over tau in [0, dt] for v(tau) = v0 + a0 tau + u tau^2 / 2, and the tau where it
+// is reached: the ends, or the vertex tau = -a0 / u when it lies inside the step.
+double MaxAbsVelocity(double v0, double a0, double u, double dt, double* at) {
+  const double v1 = v0 + a0 * dt + 0.5 * u * dt * dt;
+  double best = std::abs(v0);
+  *at = 0.0;
+  if (std::abs(v1) > best) {
+    best = std::abs(v1);
+    *at = dt;
+  }
+  if (u != 0.0) {
+    const double tau = -a0 / u;
+    if (tau > 0.0 && tau < dt) {
+      const double vertex = std::abs(v0 + 0.5 * a0 * tau);  // v0 + a0 tau + u tau^2 / 2 at tau = -a0/u
+      if (vertex > best) {
+        best = vertex;
+        *at = tau;
+      }
+    }
+  }
+  return best;
+}
+
+const char* AxisName(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
+
+}  // namespace
+
+bool QuadrotorSimOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (!(time_step > 0.0 && std::isfinite(time_step))) return fail("time_step must be positive and finite");
+  if (!(bandwidth > 0.0 && std::isfinite(bandwidth))) return fail("bandwidth must be positive and finite");
+  if (bandwidth * time_step > 0.1) {
+    return fail("bandwidth * time_step must be <= 0.1 (the controller must run at least 10 times faster "
+                "than the loop's bandwidth)");
+  }
+  if (!(settle_time >= 0.0 && std::isfinite(settle_time))) return fail("settle_time must be >= 0 and finite");
+  if (max_jerk && !PositiveFinite(*max_jerk)) return fail("max_jerk must be positive and finite on every axis");
+  if (!initial_position_error.allFinite() || !initial_velocity_error.allFinite() ||
+      !initial_acceleration_error.allFinite()) {
+    return fail("the initial errors must be finite");
+  }
+  if (!(limit_tolerance >= 0.0 && std::isfinite(limit_tolerance))) {
+    return fail("limit_tolerance must be >= 0 and finite");
+  }
+  return true;
+}
+
+QuadrotorSim::QuadrotorSim(const Options& options) : options_(options) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw std::invalid_argument("QuadrotorSimOptions: " + error);
+}
+
+FeasibilityReport QuadrotorSim::Run(const Trajectory& reference, const TemporalLimits& limits) const {
+  return Run([&reference](double t) { return reference.Evaluate(t); }, reference.duration(), limits);
+}
+
+FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
+                                    const TemporalLimits& limits) const {
+  if (!(duration >= 0.0 && std::isfinite(duration))) {
+    throw std::invalid_argument("QuadrotorSim::Run: duration must be >= 0 and finite");
+  }
+  if (!PositiveFinite(limits.max_velocity)) {
+    throw std::invalid_argument("QuadrotorSim::Run: limits.max_velocity must be positive and finite");
+  }
+  if (!PositiveFinite(limits.max_acceleration)) {
+    throw std::invalid_argument("QuadrotorSim::Run: limits.max_acceleration must be positive and finite");
+  }
+  const double dt = options_.time_step;
+  const double flight = duration + options_.settle_time;
+  if (flight / dt > kMaxSteps) {
+    throw std::invalid_argument("QuadrotorSim::Run: the flight would take more than 1e8 steps (" +
+                                std::to_string(flight) + " s at time_step " + std::to_string(dt) + " s)");
+  }
+  const int steps = static_cast<int>(std::ceil(flight / dt - 1e-9));
+
+  const double w = options_.bandwidth;
+  const double kp = w * w * w, kv = 3.0 * w * w, ka = 3.0 * w;
+  const TrajectoryState last = reference(duration);
+  // The reference at t; after its end it flies on at its final velocity.
+  const auto reference_at = [&](double t) {
+    if (t <= duration) return reference(t);
+    TrajectoryState r = last;
+    r.t = t;
+    r.position = last.position + (t - duration) * last.velocity;
+    r.acceleration.setZero();
+    r.jerk.setZero();
+    return r;
+  };
+
+  const TrajectoryState start = reference(0.0);
+  Eigen::Vector3d p = start.position + options_.initial_position_error;
+  Eigen::Vector3d v = start.velocity + options_.initial_velocity_error;
+  Eigen::Vector3d a = start.acceleration + options_.initial_acceleration_error;
+
+  FeasibilityReport report;
+  report.steps = steps;
+  int velocity_axis = 0, acceleration_axis = 0;
+  if (options_.record_states) report.states.reserve(static_cast<size_t>(steps) + 1);
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    const TrajectoryState r = reference_at(t);
+    const double error = (p - r.position).norm();
+    if (error > report.max_position_error) {
+      report.max_position_error = error;
+      report.max_position_error_time = t;
+    }
+    if (k == steps) {  // the final state: only recorded and measured
+      report.final_position_error = error;
+      if (options_.record_states) report.states.push_back({t, p, v, a, Eigen::Vector3d::Zero(), p - r.position});
+      break;
+    }
+    Eigen::Vector3d u = r.jerk + ka * (r.acceleration - a) + kv * (r.velocity - v) + kp * (r.position - p);
+    if (options_.max_jerk) {
+      const Eigen::Vector3d& jmax = *options_.max_jerk;
+      bool clipped = false;
+      for (int i = 0; i < 3; ++i) {
+        report.max_jerk_ratio = std::max(report.max_jerk_ratio, std::abs(u[i]) / jmax[i]);
+        if (std::abs(u[i]) > jmax[i]) {
+          u[i] = std::copysign(jmax[i], u[i]);
+          clipped = true;
+        }
+      }
+      if (clipped) ++report.clipped_steps;
+    }
+    report.max_jerk = std::max(report.max_jerk, u.cwiseAbs().maxCoeff());
+    if (options_.record_states) report.states.push_back({t, p, v, a, u, p - r.position});
+
+    for (int i = 0; i < 3; ++i) {
+      double at = 0.0;
+      const double vr = MaxAbsVelocity(v[i], a[i], u[i], dt, &at) / limits.max_velocity[i];
+      if (vr > report.max_velocity_ratio) {
+        report.max_velocity_ratio = vr;
+        report.max_velocity_time = t + at;
+        velocity_axis = i;
+      }
+      // a is linear over the step: its largest magnitude is at an end.
+      const double a1 = a[i] + u[i] * dt;
+      const double ar = std::max(std::abs(a[i]), std::abs(a1)) / limits.max_acceleration[i];
+      if (ar > report.max_acceleration_ratio) {
+        report.max_acceleration_ratio = ar;
+        report.max_acceleration_time = std::abs(a1) > std::abs(a[i]) ? t + dt : t;
+        acceleration_axis = i;
+      }
+    }
+    // Exact integration of the triple integrator over the step with u held.
+    p += dt * (v + dt * (0.5 * a + dt * u / 6.0));
+    v += dt * (a + 0.5 * dt * u);
+    a += dt * u;
+  }
+
+  const double bound = 1.0 + options_.limit_tolerance;
+  const bool velocity_ok = report.max_velocity_ratio <= bound;
+  const bool acceleration_ok = report.max_acceleration_ratio <= bound;
+  report.feasible = velocity_ok && acceleration_ok;
+  std::ostringstream message;
+  if (report.feasible) message << "velocity and acceleration limits hold";
+  if (!velocity_ok) {
+    message << "|v_" << AxisName(velocity_axis) << "| reaches " << report.max_velocity_ratio
+            << " x max_velocity at t = " << report.max_velocity_time << " s";
+  }
+  if (!acceleration_ok) {
+    message << (velocity_ok ? "" : "; ") << "|a_" << AxisName(acceleration_axis) << "| reaches "
+            << report.max_acceleration_ratio << " x max_acceleration at t = " << report.max_acceleration_time
+            << " s";
+  }
+  if (report.clipped_steps > 0) {
+    message << "; the jerk limit clipped the command in " << report.clipped_steps << " of " << steps
+            << " steps (up to " << report.max_jerk_ratio << " x)";
+  }
+  report.message = message.str();
+  return report;
+}
+
+}  // namespace timeopt

@@ -1,0 +1,200 @@
+#include "timeopt/sim/quadrotor_sim.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/io/temporal_io.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+namespace {
+
+using ::testing::HasSubstr;
+
+// With the three poles at -w, an error that starts as e(0) = e0, e'(0) = e''(0) = 0 evolves as
+//   e(t) = e0 (1 + x + x^2 / 2) exp(-x),  e'(t) = -e0 w x^2 / 2 exp(-x),  x = w t,
+// and one that starts as e''(0) = D (a jump D of the reference acceleration, which the vehicle cannot
+// follow) with e(0) = e'(0) = 0 as e(t) = D t^2 / 2 exp(-x), so that
+//   e'(t) = (D / w) (x - x^2 / 2) exp(-x),  e''(t) = D (1 - 2 x + x^2 / 2) exp(-x).
+// The extrema used below: e''/D has its minimum -0.2060 at x = 3 - sqrt 3, e' its maximum at
+// x = 2 - sqrt 2, and |e'| in the first case at x = 2.
+double JumpAccelerationOvershoot() {  // -min e''/D
+  const double x = 3.0 - std::sqrt(3.0);
+  return -(1.0 - 2.0 * x + 0.5 * x * x) * std::exp(-x);
+}
+double JumpVelocityOvershoot(double w) {  // max e'/D
+  const double x = 2.0 - std::sqrt(2.0);
+  return (x - 0.5 * x * x) * std::exp(-x) / w;
+}
+
+TemporalLimits Limits(double vmax, double amax) {
+  TemporalLimits limits;
+  limits.max_velocity.setConstant(vmax);
+  limits.max_acceleration.setConstant(amax);
+  return limits;
+}
+
+// The controller holds u over each step of dt: the discrete loop lags the continuous one by about
+// dt / 2, so values along the flight differ from the closed forms by about w dt / 2 relative (here
+// 5e-4). The tolerances are twice that.
+constexpr double kW = 10.0, kDt = 1e-4, kZohTolerance = 1e-3;
+
+QuadrotorSimOptions Options() {
+  QuadrotorSimOptions o;
+  o.bandwidth = kW;
+  o.time_step = kDt;
+  o.settle_time = 0.0;
+  return o;
+}
+
+TEST(QuadrotorSim, InitialErrorDecaysAsTheTriplePole) {
+  QuadrotorSimOptions o = Options();
+  o.initial_position_error = Eigen::Vector3d(0.1, 0.0, 0.0);
+  o.record_states = true;
+  const FeasibilityReport report =
+      QuadrotorSim(o).Run([](double t) { return TrajectoryState{t}; }, 2.0, Limits(1.0, 10.0));
+  ASSERT_EQ(report.states.size(), 20001u);
+  double worst = 0.0;
+  for (const SimState& s : report.states) {
+    const double x = kW * s.t;
+    worst = std::max(worst, std::abs(s.position.x() - 0.1 * (1.0 + x + 0.5 * x * x) * std::exp(-x)));
+    EXPECT_EQ(s.position.y(), 0.0);
+  }
+  EXPECT_LT(worst, kZohTolerance * 0.1);
+  // Peak speed 0.1 w 2 exp(-2) = 0.2707 m/s at t = 2 / w; vmax = 1.
+  EXPECT_NEAR(report.max_velocity_ratio, 0.1 * kW * 2.0 * std::exp(-2.0), kZohTolerance * 0.2707);
+  EXPECT_NEAR(report.max_velocity_time, 2.0 / kW, 2e-3);
+  EXPECT_TRUE(report.feasible) << report.message;
+  EXPECT_NEAR(report.max_position_error, 0.1, 1e-12);
+  // At t = 2 s (x = 20) the error is 4.6e-8 m; the discrete poles differ from -w by about w dt / 2
+  // relative, which changes exp(-x) by about x w dt / 2 = 1%: 5% allowed.
+  const double final_error = 0.1 * (1 + 20 + 200) * std::exp(-20.0);
+  EXPECT_NEAR(report.final_position_error, final_error, 0.05 * final_error);
+}
+
+// The reference accelerates at D = 1 m/s^2 from t = 0.5 s; the vehicle's acceleration overshoots to
+// 1.2060 D at t = 0.5 + (3 - sqrt 3) / w.
+TEST(QuadrotorSim, AccelerationJumpOvershootsAsTheClosedForm) {
+  const auto reference = [](double t) {
+    TrajectoryState r{t};
+    if (t >= 0.5) {
+      const double tau = t - 0.5;
+      r.position.x() = 0.5 * tau * tau;
+      r.velocity.x() = tau;
+      r.acceleration.x() = 1.0;
+    }
+    return r;
+  };
+  QuadrotorSimOptions o = Options();
+  o.record_states = true;
+  const FeasibilityReport report = QuadrotorSim(o).Run(reference, 1.5, Limits(10.0, 1.0));
+  const double expected = 1.0 + JumpAccelerationOvershoot();
+  EXPECT_NEAR(expected, 1.2060, 1e-4);
+  EXPECT_NEAR(report.max_acceleration_ratio, expected, kZohTolerance * expected);
+  EXPECT_NEAR(report.max_acceleration_time, 0.5 + (3.0 - std::sqrt(3.0)) / kW, 2e-3);
+  EXPECT_FALSE(report.feasible);
+  EXPECT_THAT(report.message, HasSubstr("|a_x| reaches 1.20"));
+
+  // The per-step maxima are exact: sampling every step's polynomials 50 times finds nothing larger,
+  // and comes within the sampling error of the reported values.
+  double sampled_v = 0.0, sampled_a = 0.0;
+  for (size_t k = 0; k + 1 < report.states.size(); ++k) {
+    const SimState& s = report.states[k];
+    for (int q = 0; q <= 50; ++q) {
+      const double tau = kDt * q / 50.0;
+      sampled_v = std::max(sampled_v, std::abs(s.velocity.x() + s.acceleration.x() * tau + 0.5 * s.jerk.x() * tau * tau));
+      sampled_a = std::max(sampled_a, std::abs(s.acceleration.x() + s.jerk.x() * tau));
+    }
+  }
+  EXPECT_LE(sampled_v / 10.0, report.max_velocity_ratio * (1 + 1e-14));
+  EXPECT_NEAR(sampled_v / 10.0, report.max_velocity_ratio, 1e-12);
+  EXPECT_LE(sampled_a, report.max_acceleration_ratio * (1 + 1e-14));
+  EXPECT_NEAR(sampled_a, report.max_acceleration_ratio, 1e-12);
+}
+
+// The contract example (a 10 m line, vmax 2, amax 1, rest to rest): the optimal profile accelerates at
+// amax for 2 m (10 cells of K = 50), cruises, and brakes at amax, so the reference acceleration
+// jumps by amax where cruise begins and ends. The vehicle overshoots vmax after the first jump and
+// amax after the second, by the closed forms (the first transient has decayed, exp(-30), before the
+// second jump 3 s later).
+TEST(QuadrotorSim, TimeOptimalLineOvershootsAtTheAccelerationJumps) {
+  const TemporalProblem problem =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json");
+  const TemporalResult result = MakeSocpTemporalSolver()->Solve(problem);
+  ASSERT_TRUE(result.is_success()) << result.message;
+  ASSERT_NEAR(result.total_time, 7.0, 1e-7);
+  const Trajectory trajectory(problem.curve, result.profile);
+  QuadrotorSimOptions o = Options();
+  o.settle_time = 1.0;
+  const FeasibilityReport report = QuadrotorSim(o).Run(trajectory, problem.limits);
+  const double vmax = 2.0, amax = 1.0;
+  // The transients scale with amax / w (velocity) and amax (acceleration).
+  EXPECT_NEAR(report.max_velocity_ratio, 1.0 + amax * JumpVelocityOvershoot(kW) / vmax,
+              kZohTolerance * amax / kW / vmax);
+  EXPECT_NEAR(report.max_acceleration_ratio, 1.0 + JumpAccelerationOvershoot(), kZohTolerance * amax);
+  EXPECT_NEAR(report.max_acceleration_time, 5.0 + (3.0 - std::sqrt(3.0)) / kW, 2e-3);
+  EXPECT_FALSE(report.feasible);
+  EXPECT_THAT(report.message, HasSubstr("|v_x| reaches 1.01"));
+  EXPECT_THAT(report.message, HasSubstr("|a_x| reaches 1.20"));
+  // The vehicle ends at the goal: the last jump's transient decays as exp(-w t) over the settle time.
+  EXPECT_LT(report.final_position_error, 1e-3);
+}
+
+TEST(QuadrotorSim, JerkLimitClipsEveryCommand) {
+  QuadrotorSimOptions o = Options();
+  o.initial_position_error = Eigen::Vector3d(0.1, -0.2, 0.0);
+  o.max_jerk = Eigen::Vector3d(5.0, 5.0, 5.0);
+  o.record_states = true;
+  const FeasibilityReport report =
+      QuadrotorSim(o).Run([](double t) { return TrajectoryState{t}; }, 1.0, Limits(1.0, 10.0));
+  // Unclipped, the first command would be -k_p e = w^3 (-0.1, 0.2) = (-100, 200) m/s^3 on x and y.
+  ASSERT_FALSE(report.states.empty());
+  EXPECT_EQ(report.states[0].jerk.x(), -5.0);
+  EXPECT_EQ(report.states[0].jerk.y(), 5.0);
+  EXPECT_EQ(report.states[0].jerk.z(), 0.0);
+  EXPECT_GE(report.max_jerk_ratio, 200.0 / 5.0);
+  EXPECT_GT(report.clipped_steps, 0);
+  EXPECT_LE(report.max_jerk, 5.0);
+  for (const SimState& s : report.states) EXPECT_LE(s.jerk.cwiseAbs().maxCoeff(), 5.0);
+  EXPECT_THAT(report.message, HasSubstr("the jerk limit clipped the command"));
+}
+
+TEST(QuadrotorSim, RejectsBadOptionsAndInputs) {
+  std::string error;
+  QuadrotorSimOptions o;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+  o.time_step = 0.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_THAT(error, HasSubstr("time_step"));
+  o = QuadrotorSimOptions();
+  o.bandwidth = 200.0;  // 200 rad/s at 1 kHz
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_THAT(error, HasSubstr("bandwidth * time_step"));
+  o = QuadrotorSimOptions();
+  o.max_jerk = Eigen::Vector3d(1.0, -1.0, 1.0);
+  EXPECT_THROW(QuadrotorSim{o}, std::invalid_argument);
+  o = QuadrotorSimOptions();
+  o.initial_velocity_error.x() = std::nan("");
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_THAT(error, HasSubstr("initial errors"));
+
+  const QuadrotorSim sim;
+  const auto hover = [](double t) { return TrajectoryState{t}; };
+  EXPECT_THROW(sim.Run(hover, 1.0, Limits(-1.0, 1.0)), std::invalid_argument);
+  EXPECT_THROW(sim.Run(hover, std::nan(""), Limits(1.0, 1.0)), std::invalid_argument);
+  try {
+    sim.Run(hover, 1e9, Limits(1.0, 1.0));
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("more than 1e8 steps"));
+  }
+}
+
+}  // namespace
+}  // namespace timeopt
