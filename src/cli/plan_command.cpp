@@ -30,6 +30,7 @@
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
+#include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/spatial/plan_plot.h"
 #include "timeopt/spatial/planner.h"
 #include "timeopt/trajectory/trajectory.h"
@@ -247,6 +248,12 @@ int RunPlan(PlanArgs args) {
                         {"plan_total", plan.times.total_ms}};
   if (ok) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
+    // The trajectory flown by the default jerk-input quadrotor (see `timeopt simulate`).
+    const FeasibilityReport flight = QuadrotorSim().Run(trajectory, options.limits);
+    summary["flight"] = {{"limits_hold", flight.feasible},
+                         {"max_velocity_ratio", flight.max_velocity_ratio},
+                         {"max_acceleration_ratio", flight.max_acceleration_ratio},
+                         {"max_position_error", flight.max_position_error}};
     if (!args.output.empty()) {
       EnsureParentDirectory(args.output);
       std::ofstream out(args.output);
