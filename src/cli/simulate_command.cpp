@@ -7,6 +7,7 @@
 
 #include <iomanip>
 #include <iostream>
+#include <stdexcept>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -55,6 +56,10 @@ int RunSimulate(const SimulateArgs& args) {
   options.settle_time = args.settle_time;
   if (args.max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   options.record_states = !args.states.empty();
+  if (args.control_rate < 10.0 * args.bandwidth) {
+    throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
+                                "time constant 1 / bandwidth)");
+  }
   const QuadrotorSim sim(options);  // invalid options throw before the solve
 
   const auto solver = MakeTemporalSolver(args.solver == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp);
@@ -65,7 +70,8 @@ int RunSimulate(const SimulateArgs& args) {
     if (result.status == TemporalStatus::kInvalidInput) return kExitInvalidInput;
     return kExitFailure;
   }
-  const FeasibilityReport report = sim.Run(Trajectory(problem.curve, result.profile), problem.limits);
+  // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
+  const FeasibilityReport report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
 
   nlohmann::ordered_json json;
   json["feasible"] = report.feasible;
@@ -76,8 +82,10 @@ int RunSimulate(const SimulateArgs& args) {
   json["max_acceleration_ratio"] = report.max_acceleration_ratio;
   json["max_acceleration_time"] = report.max_acceleration_time;
   json["max_jerk"] = report.max_jerk;
+  json["max_jerk_ratio"] = report.max_jerk_ratio;
   json["clipped_steps"] = report.clipped_steps;
   json["max_position_error"] = report.max_position_error;
+  json["max_position_error_time"] = report.max_position_error_time;
   json["final_position_error"] = report.final_position_error;
   json["steps"] = report.steps;
   json["bandwidth"] = args.bandwidth;

@@ -129,7 +129,16 @@ int RunWaypoints(const WaypointsArgs& args) {
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
   WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
   const QuadrotorSim sim;
-  const FeasibilityReport flight = sim.Run(trajectory, problem.limits);
+  std::ostringstream flown;
+  try {
+    const FeasibilityReport flight = sim.Fly(trajectory, problem);
+    flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
+          << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
+          << ", max |a|/amax " << flight.max_acceleration_ratio << " ("
+          << (flight.feasible ? "limits hold" : "limits exceeded") << "; see `timeopt simulate`)";
+  } catch (const std::invalid_argument& e) {
+    flown << "not flown in simulation: " << e.what();
+  }
 
   std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
@@ -142,10 +151,7 @@ int RunWaypoints(const WaypointsArgs& args) {
             << "total_time: " << result.total_time << " s\n"
             << "max |v|/vmax along the trajectory: " << result.max_velocity_ratio
             << ", max |a|/amax: " << result.max_acceleration_ratio << "\n"
-            << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth
-            << " rad/s, 1 kHz): max |v|/vmax " << flight.max_velocity_ratio << ", max |a|/amax "
-            << flight.max_acceleration_ratio << " (" << (flight.feasible ? "limits hold" : "limits exceeded")
-            << "; see `timeopt simulate`)\n"
+            << flown.str() << "\n"
             << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
             << ", " << (dir / "samples.csv").string() << ", " << (dir / "profile.png").string()
             << "\n";

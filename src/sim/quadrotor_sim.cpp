@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 namespace timeopt {
 namespace {
 
-// Longest flight, in controller steps.
+// Longest flight, in controller steps, and longest recorded one (SimState is 128 bytes).
 constexpr double kMaxSteps = 1e8;
+constexpr double kMaxRecordedSteps = 1e7;
 
 bool PositiveFinite(const Eigen::Vector3d& v) {
   return v.allFinite() && (v.array() > 0.0).all();
@@ -50,8 +52,8 @@ bool QuadrotorSimOptions::IsValid(std::string* error) const {
   if (!(time_step > 0.0 && std::isfinite(time_step))) return fail("time_step must be positive and finite");
   if (!(bandwidth > 0.0 && std::isfinite(bandwidth))) return fail("bandwidth must be positive and finite");
   if (bandwidth * time_step > 0.1) {
-    return fail("bandwidth * time_step must be <= 0.1 (the controller must run at least 10 times faster "
-                "than the loop's bandwidth)");
+    return fail("bandwidth * time_step must be <= 0.1 (at least 10 controller steps per time constant "
+                "1 / bandwidth)");
   }
   if (!(settle_time >= 0.0 && std::isfinite(settle_time))) return fail("settle_time must be >= 0 and finite");
   if (max_jerk && !PositiveFinite(*max_jerk)) return fail("max_jerk must be positive and finite on every axis");
@@ -76,6 +78,19 @@ FeasibilityReport QuadrotorSim::Run(const Trajectory& reference, const TemporalL
 
 FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
                                     const TemporalLimits& limits) const {
+  if (!reference) throw std::invalid_argument("QuadrotorSim::Run: the reference is empty");
+  const TrajectoryState start = reference(0.0);
+  return RunFrom(reference, duration, limits, start.velocity, start.acceleration);
+}
+
+FeasibilityReport QuadrotorSim::Fly(const Trajectory& reference, const TemporalProblem& problem) const {
+  return RunFrom([&reference](double t) { return reference.Evaluate(t); }, reference.duration(),
+                 problem.limits, problem.boundary.start_velocity, problem.boundary.start_acceleration);
+}
+
+FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double duration,
+                                        const TemporalLimits& limits, const Eigen::Vector3d& start_velocity,
+                                        const Eigen::Vector3d& start_acceleration) const {
   if (!(duration >= 0.0 && std::isfinite(duration))) {
     throw std::invalid_argument("QuadrotorSim::Run: duration must be >= 0 and finite");
   }
@@ -87,34 +102,63 @@ FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
   }
   const double dt = options_.time_step;
   const double flight = duration + options_.settle_time;
-  if (flight / dt > kMaxSteps) {
-    throw std::invalid_argument("QuadrotorSim::Run: the flight would take more than 1e8 steps (" +
-                                std::to_string(flight) + " s at time_step " + std::to_string(dt) + " s)");
+  // 1e-9 relative slack: a duration a rounding above a whole number of steps adds no step.
+  const double exact_steps = flight / dt * (1.0 - 1e-9);
+  if (exact_steps > kMaxSteps || (options_.record_states && exact_steps > kMaxRecordedSteps)) {
+    std::ostringstream m;
+    m << "QuadrotorSim::Run: the flight (" << flight << " s at time_step " << dt << " s) would take more than "
+      << (exact_steps > kMaxSteps ? "1e8 steps" : "1e7 recorded steps (record_states)");
+    throw std::invalid_argument(m.str());
   }
-  const int steps = static_cast<int>(std::ceil(flight / dt - 1e-9));
+  const int steps = static_cast<int>(std::ceil(exact_steps));
 
   const double w = options_.bandwidth;
   const double kp = w * w * w, kv = 3.0 * w * w, ka = 3.0 * w;
   const TrajectoryState last = reference(duration);
   // The reference at t; after its end it flies on at its final velocity.
   const auto reference_at = [&](double t) {
-    if (t <= duration) return reference(t);
-    TrajectoryState r = last;
-    r.t = t;
-    r.position = last.position + (t - duration) * last.velocity;
-    r.acceleration.setZero();
-    r.jerk.setZero();
+    TrajectoryState r;
+    if (t <= duration) {
+      r = reference(t);
+    } else {
+      r = last;
+      r.t = t;
+      r.position = last.position + (t - duration) * last.velocity;
+      r.acceleration.setZero();
+      r.jerk.setZero();
+    }
+    if (!r.position.allFinite() || !r.velocity.allFinite() || !r.acceleration.allFinite() ||
+        !r.jerk.allFinite()) {
+      std::ostringstream m;
+      m << "QuadrotorSim::Run: the reference is not finite at t = " << t << " s";
+      throw std::invalid_argument(m.str());
+    }
     return r;
   };
 
-  const TrajectoryState start = reference(0.0);
-  Eigen::Vector3d p = start.position + options_.initial_position_error;
-  Eigen::Vector3d v = start.velocity + options_.initial_velocity_error;
-  Eigen::Vector3d a = start.acceleration + options_.initial_acceleration_error;
+  Eigen::Vector3d p = reference_at(0.0).position + options_.initial_position_error;
+  Eigen::Vector3d v = start_velocity + options_.initial_velocity_error;
+  Eigen::Vector3d a = start_acceleration + options_.initial_acceleration_error;
 
   FeasibilityReport report;
   report.steps = steps;
   int velocity_axis = 0, acceleration_axis = 0;
+  // Folds a value of |v_i| / vmax_i or |a_i| / amax_i reached at time t into the report.
+  const auto note_velocity = [&](double ratio, double t, int axis) {
+    if (ratio > report.max_velocity_ratio) {
+      report.max_velocity_ratio = ratio;
+      report.max_velocity_time = t;
+      velocity_axis = axis;
+    }
+  };
+  const auto note_acceleration = [&](double ratio, double t, int axis) {
+    if (ratio > report.max_acceleration_ratio) {
+      report.max_acceleration_ratio = ratio;
+      report.max_acceleration_time = t;
+      acceleration_axis = axis;
+    }
+  };
+  bool diverged = false;
   if (options_.record_states) report.states.reserve(static_cast<size_t>(steps) + 1);
   for (int k = 0; k <= steps; ++k) {
     const double t = k * dt;
@@ -124,8 +168,18 @@ FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
       report.max_position_error = error;
       report.max_position_error_time = t;
     }
-    if (k == steps) {  // the final state: only recorded and measured
+    if (!(p.allFinite() && v.allFinite() && a.allFinite())) {  // the loop diverged (jerk clipping)
+      diverged = true;
       report.final_position_error = error;
+      report.max_velocity_time = report.max_acceleration_time = t;
+      break;
+    }
+    if (k == steps) {  // the final state: measured (the only state when steps = 0) and recorded
+      report.final_position_error = error;
+      for (int i = 0; i < 3; ++i) {
+        note_velocity(std::abs(v[i]) / limits.max_velocity[i], t, i);
+        note_acceleration(std::abs(a[i]) / limits.max_acceleration[i], t, i);
+      }
       if (options_.record_states) report.states.push_back({t, p, v, a, Eigen::Vector3d::Zero(), p - r.position});
       break;
     }
@@ -147,20 +201,11 @@ FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
 
     for (int i = 0; i < 3; ++i) {
       double at = 0.0;
-      const double vr = MaxAbsVelocity(v[i], a[i], u[i], dt, &at) / limits.max_velocity[i];
-      if (vr > report.max_velocity_ratio) {
-        report.max_velocity_ratio = vr;
-        report.max_velocity_time = t + at;
-        velocity_axis = i;
-      }
+      note_velocity(MaxAbsVelocity(v[i], a[i], u[i], dt, &at) / limits.max_velocity[i], t + at, i);
       // a is linear over the step: its largest magnitude is at an end.
       const double a1 = a[i] + u[i] * dt;
-      const double ar = std::max(std::abs(a[i]), std::abs(a1)) / limits.max_acceleration[i];
-      if (ar > report.max_acceleration_ratio) {
-        report.max_acceleration_ratio = ar;
-        report.max_acceleration_time = std::abs(a1) > std::abs(a[i]) ? t + dt : t;
-        acceleration_axis = i;
-      }
+      note_acceleration(std::max(std::abs(a[i]), std::abs(a1)) / limits.max_acceleration[i],
+                        std::abs(a1) > std::abs(a[i]) ? t + dt : t, i);
     }
     // Exact integration of the triple integrator over the step with u held.
     p += dt * (v + dt * (0.5 * a + dt * u / 6.0));
@@ -171,8 +216,16 @@ FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
   const double bound = 1.0 + options_.limit_tolerance;
   const bool velocity_ok = report.max_velocity_ratio <= bound;
   const bool acceleration_ok = report.max_acceleration_ratio <= bound;
-  report.feasible = velocity_ok && acceleration_ok;
+  report.feasible = velocity_ok && acceleration_ok && !diverged;
   std::ostringstream message;
+  message.precision(10);
+  if (diverged) {
+    message << "the flight diverged (non-finite state) at t = " << report.max_velocity_time << " s";
+    if (report.clipped_steps > 0) message << " after " << report.clipped_steps << " steps clipped to the jerk limit";
+    report.max_velocity_ratio = report.max_acceleration_ratio = std::numeric_limits<double>::infinity();
+    report.message = message.str();
+    return report;
+  }
   if (report.feasible) message << "velocity and acceleration limits hold";
   if (!velocity_ok) {
     message << "|v_" << AxisName(velocity_axis) << "| reaches " << report.max_velocity_ratio

@@ -201,10 +201,13 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_THAT(r.output, HasSubstr("limit exceeded in simulation: |v_x| reaches 1.01"));
   std::string json = ReadTextFile(Path("s.json"));
   EXPECT_THAT(json, HasSubstr("\"feasible\": false"));
-  EXPECT_NEAR(JsonNumber(json, "max_acceleration_ratio"), 1.21, 0.01);  // 1.206 + zero-order hold at 1 kHz
+  // 1.206 in continuous time; 1.205-1.211 at 1 kHz depending on where a jump falls between updates.
+  EXPECT_NEAR(JsonNumber(json, "max_acceleration_ratio"), 1.208, 0.005);
   const std::string csv = ReadTextFile(Path("s.csv"));
   EXPECT_EQ(csv.rfind("t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz,ex,ey,ez\n", 0), 0u);
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 8001 + 1);  // 7 s + 1 s at 1 kHz, and the end
+  // A header, the start of every step and the final state.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + JsonNumber(json, "steps") + 1);
+  EXPECT_EQ(JsonNumber(json, "steps"), 8000);  // 7 s and 1 s of settling at 1 kHz
 
   Write("lambda.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
     "limits": {"max_velocity": 2.0, "max_acceleration": 1.0, "max_acceleration_change": 0.05},
@@ -217,7 +220,7 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
 
   r = RunCli("simulate " + line + " --control-rate 50");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.output, HasSubstr("bandwidth * time_step must be <= 0.1"));
+  EXPECT_THAT(r.output, HasSubstr("--control-rate must be at least 10 x --bandwidth"));
 }
 
 }  // namespace

@@ -8,7 +8,7 @@
 //   p' = v,  v' = a,  a' = u,
 //   u = j_ref + k_a (a_ref - a) + k_v (v_ref - v) + k_p (p_ref - p),
 // with the gains that put the three poles of the tracking error at -bandwidth (k_a = 3 w,
-// k_v = 3 w^2, k_p = w^3: critically damped, no oscillation). The controller runs at a fixed rate:
+// k_v = 3 w^2, k_p = w^3: critically damped in continuous time). The controller runs at a fixed rate:
 // u is computed from the reference at the start of each step and held over the step (zero-order
 // hold), optionally clipped to a jerk limit. Within a step a is linear and v quadratic in time, so
 // their largest magnitudes over the step are found exactly (ends and the vertex of v), and the
@@ -34,7 +34,9 @@ namespace timeopt {
 
 struct QuadrotorSimOptions {
   /// Controller period, s: the jerk command is held constant over each step. 1e-3 (1 kHz, a typical
-  /// attitude-loop rate). Must be > 0 and bandwidth * time_step <= 0.1.
+  /// attitude-loop rate). Must be > 0 and bandwidth * time_step <= 0.1 (at least 10 steps per time
+  /// constant 1 / bandwidth; the held command moves the loop's poles by about (bandwidth *
+  /// time_step / 2)^(1/3) relative).
   double time_step = 1e-3;
   /// Closed-loop bandwidth w of the tracking error, rad/s: all three poles at -w. 10.
   double bandwidth = 10.0;
@@ -51,7 +53,7 @@ struct QuadrotorSimOptions {
   /// Relative slack of the verdict: a limit holds if |value| <= limit (1 + limit_tolerance). 1e-9,
   /// for rounding.
   double limit_tolerance = 1e-9;
-  /// Keep the state at every step in FeasibilityReport::states. False.
+  /// Keep the state at every step in FeasibilityReport::states (at most 1e7 steps). False.
   bool record_states = false;
 
   /// False, with a message naming the first bad setting, if any setting is out of range.
@@ -69,13 +71,15 @@ struct SimState {
 };
 
 struct FeasibilityReport {
-  /// True iff the largest velocity and acceleration ratios are <= 1 + limit_tolerance. (A jerk
-  /// limit is the vehicle's: commands are clipped to it, so it always holds; see clipped_steps.)
+  /// True iff the largest velocity and acceleration ratios are <= 1 + limit_tolerance and the flight
+  /// stayed finite. (A jerk limit is the vehicle's: commands are clipped to it, so it always holds;
+  /// see clipped_steps.)
   bool feasible = false;
   /// The failed limits with their largest ratio, axis and time, or "velocity and acceleration
   /// limits hold"; and how many steps clipped the jerk, if any did.
   std::string message;
   /// Largest |v_axis(t)| / max_velocity(axis) over the whole flight (exact between steps), and when.
+  /// Infinite, with both times at the moment it happened, if the flight diverged.
   double max_velocity_ratio = 0.0;
   double max_velocity_time = 0.0;
   /// Largest |a_axis(t)| / max_acceleration(axis) over the whole flight (exact), and when.
@@ -106,18 +110,30 @@ class QuadrotorSim {
   /// Throws std::invalid_argument with IsValid's message if the options are invalid.
   explicit QuadrotorSim(const Options& options = Options());
 
-  /// Flies `reference` for duration() s plus the settle time and checks `limits`'
-  /// velocity and acceleration. After the reference ends, it continues at its final velocity with
-  /// zero acceleration (a hover for rest-to-rest trajectories). Throws std::invalid_argument if the
-  /// limits are not positive and finite or the flight would take more than 1e8 steps.
+  /// Flies `reference` for duration() s plus the settle time and checks `limits`' velocity and
+  /// acceleration, the vehicle starting in the reference's initial state plus the options' initial
+  /// errors. Steps: ceil((duration + settle_time) / time_step), with 1e-9 relative slack. After the
+  /// reference ends, it continues at its final velocity with zero acceleration (a hover for
+  /// rest-to-rest trajectories). Throws std::invalid_argument if the limits are not positive and
+  /// finite, the flight would take more than 1e8 steps, or the reference returns a non-finite state.
   FeasibilityReport Run(const Trajectory& reference, const TemporalLimits& limits) const;
 
   /// The same for a reference given as a function on [0, duration] (duration >= 0).
   FeasibilityReport Run(const Reference& reference, double duration, const TemporalLimits& limits) const;
 
+  /// Flies `reference` as the solution of `problem`: its limits, and the vehicle starting in the
+  /// problem's start state (boundary start velocity and acceleration, plus the options' initial
+  /// errors). The profile meets the start velocity, but its acceleration at t = 0 is the first
+  /// cell's unless max_acceleration_change bounds it, so a vehicle at rest starts with a jump.
+  FeasibilityReport Fly(const Trajectory& reference, const TemporalProblem& problem) const;
+
   const Options& options() const { return options_; }
 
  private:
+  FeasibilityReport RunFrom(const Reference& reference, double duration, const TemporalLimits& limits,
+                            const Eigen::Vector3d& start_velocity,
+                            const Eigen::Vector3d& start_acceleration) const;
+
   Options options_;
 };
 
