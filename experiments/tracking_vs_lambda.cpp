@@ -6,6 +6,7 @@
 // Writes tracking_vs_lambda.csv and tracking_vs_lambda.png (x axis log10 lambda_a).
 // Usage: experiment_tracking_vs_lambda [--out DIR] [--waypoints FILE.csv] [-K K]
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -91,7 +92,10 @@ int main(int argc, char** argv) {
       p.cells_per_piece = K;
       p.constraint_mode = ConstraintMode::kCertified;
       const TemporalResult r = solver->Solve(p);
-      csv << curves[c].name << "," << (lambda ? std::to_string(*lambda) : "none") << "," << ToString(r.status);
+      csv << curves[c].name << ",";
+      if (lambda) csv << *lambda;
+      else csv << "none";
+      csv << "," << ToString(r.status);
       if (!r.is_success()) {
         csv << ",,,,,\n";
         std::cerr << curves[c].name << " lambda " << (lambda ? *lambda : 0.0) << ": " << r.message << "\n";
@@ -100,8 +104,10 @@ int main(int argc, char** argv) {
       const FeasibilityReport f = sim.Fly(Trajectory(p.curve, r.profile), p);
       csv << "," << r.total_time << "," << r.max_acceleration_ratio << "," << f.max_velocity_ratio << ","
           << f.max_acceleration_ratio << "," << (f.feasible ? 1 : 0) << "\n";
-      std::cout << curves[c].name << " lambda_a " << (lambda ? std::to_string(*lambda) : "none")
-                << ": T " << r.total_time << " s, flown max |v|/vmax " << f.max_velocity_ratio
+      std::cout << curves[c].name << " lambda_a ";
+      if (lambda) std::cout << *lambda;
+      else std::cout << "none";
+      std::cout << ": T " << r.total_time << " s, flown max |v|/vmax " << f.max_velocity_ratio
                 << ", max |a|/amax " << f.max_acceleration_ratio << (f.feasible ? " (limits hold)" : "")
                 << "\n";
       if (!lambda) {

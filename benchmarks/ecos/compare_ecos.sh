@@ -25,8 +25,9 @@ for f in "$dir"/temporal_*.cbf "$dir"/conic_temporal_*.cbf; do
   python3 - "$f" "$dir/ours.json" "$dir/ecos.json" <<'PY'
 import json, os, sys
 f, ours, ecos = sys.argv[1], json.load(open(sys.argv[2])), json.load(open(sys.argv[3]))
-print("%-30s %8d %6d %10.3f %18.12g | %6d %10.3f %18.12g %s" % (
+objective = "%18.12g" % ours["objective"] if ours.get("objective") is not None else "%18s" % ours["status"]
+print("%-30s %8d %6d %10.3f %s | %6d %10.3f %18.12g %s" % (
     os.path.basename(f), ours["num_variables"], ours["iterations"], ours["solve_time_ms"],
-    ours["objective"], ecos["iterations"], ecos["solve_time_ms"], ecos["objective"], ecos["status"]))
+    objective, ecos["iterations"], ecos["solve_time_ms"], ecos["objective"], ecos["status"]))
 PY
 done

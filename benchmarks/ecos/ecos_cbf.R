@@ -1,7 +1,7 @@
 # Solves CBF files (the subset timeopt writes: free variables; L=, L+, Q and QR rows) with ECOS,
 # the embedded conic solver, from Debian's r-cran-ecosolver, and prints one JSON line per file:
 # status, objective, iterations and ECOS's own median run time over --repeat solves (its timer,
-# so R's overhead is not counted).
+# so R's overhead is not counted; it includes ECOS's setup, which every solve redoes).
 #   Rscript benchmarks/ecos/ecos_cbf.R [--repeat N] FILE.cbf ...
 suppressPackageStartupMessages({ library(ECOSolveR); library(Matrix) })
 
@@ -59,7 +59,11 @@ if (length(args) >= 2 && args[1] == "--repeat") { repeats <- as.integer(args[2])
 for (f in args) {
   p <- read_cbf(f); times <- numeric(0)
   for (r in seq_len(repeats)) {
-    s <- ECOS_csolve(c = p$c, G = p$G, h = p$h, dims = p$dims, A = p$A, b = p$b)
+    # Fresh copies every time: ECOS works in place on the arrays it is given (scaling), so reusing
+    # them would solve a slightly different problem in each repeat.
+    G <- p$G; G@x <- G@x + 0
+    A <- p$A; if (!is.null(A)) A@x <- A@x + 0
+    s <- ECOS_csolve(c = p$c + 0, G = G, h = p$h + 0, dims = p$dims, A = A, b = p$b + 0)
     times <- c(times, s$timing[["runtime"]])
   }
   cat(sprintf('{"file": "%s", "solver": "ecos", "status": "%s", "objective": %.12g, "iterations": %d, "solve_time_ms": %.4g, "repeat": %d}\n',

@@ -253,7 +253,7 @@ int RunPlan(PlanArgs args) {
     rest_to_rest.limits = options.limits;
     try {
       const FeasibilityReport flight = QuadrotorSim().Fly(trajectory, rest_to_rest);
-      summary["flight"] = {{"limits_hold", flight.feasible},
+      summary["flight"] = {{"feasible", flight.feasible},
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},
                            {"max_position_error", flight.max_position_error}};

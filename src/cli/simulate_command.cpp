@@ -5,6 +5,7 @@
 // 1 a limit was exceeded (one line on stderr) or the solve failed, 3 the temporal problem is
 // infeasible, 2 invalid input.
 
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <stdexcept>
@@ -56,6 +57,10 @@ int RunSimulate(const SimulateArgs& args) {
   options.settle_time = args.settle_time;
   if (args.max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   options.record_states = !args.states.empty();
+  if (!std::isfinite(args.control_rate) || !std::isfinite(args.bandwidth) || !std::isfinite(args.settle_time) ||
+      !std::isfinite(args.max_jerk)) {
+    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time and --max-jerk must be finite");
+  }
   if (args.control_rate < 10.0 * args.bandwidth) {
     throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
                                 "time constant 1 / bandwidth)");
@@ -71,7 +76,12 @@ int RunSimulate(const SimulateArgs& args) {
     return kExitFailure;
   }
   // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
-  const FeasibilityReport report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
+  FeasibilityReport report;
+  try {
+    report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument((args.states.empty() ? "" : "--states: ") + std::string(e.what()));
+  }
 
   nlohmann::ordered_json json;
   json["feasible"] = report.feasible;

@@ -14,6 +14,7 @@
 #include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
+#include "timeopt/io/errors.h"
 #include "timeopt/io/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
@@ -47,7 +48,8 @@ struct TemporalArgs {
 };
 
 // Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
-// decided the problem there is no program to write: a warning, and the solve's exit code stands.
+// decided the problem there is no program to write, or when the file cannot be written: a warning,
+// and the solve's exit code stands.
 void ExportSocp(const TemporalProblem& problem, const std::string& path) {
   conic::Problem socp;
   try {
@@ -58,7 +60,11 @@ void ExportSocp(const TemporalProblem& problem, const std::string& path) {
   }
   std::ostringstream text;
   conic::WriteCbf(socp, text);
-  WriteTextFile(path, text.str());
+  try {
+    WriteTextFile(path, text.str());
+  } catch (const FileError& e) {
+    std::cerr << "timeopt: --export-cbf: nothing written: " << e.what() << "\n";
+  }
 }
 
 // Solves, writes the requested outputs and returns the exit code.

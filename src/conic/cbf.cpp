@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <locale>
+#include <new>
 #include <set>
 #include <istream>
 #include <ostream>
@@ -18,9 +19,10 @@
 namespace timeopt::conic {
 namespace {
 
-// Largest number of variables, rows or entries a file may declare. Sizes are allocated before the
-// data is read, so an absurd declaration in a tiny file would otherwise exhaust memory.
-constexpr int kMaxSize = 100'000'000;
+// Largest number of variables, rows or entries a file may declare. Arrays of the declared sizes are
+// allocated (about 20 bytes per row), so an absurd declaration in a tiny file would otherwise exhaust
+// memory.
+constexpr int kMaxSize = 10'000'000;
 
 // The domains of a block of variables or constraint rows.
 enum class Domain { kFree, kNonnegative, kNonpositive, kZero, kSoc, kRotated };
@@ -151,36 +153,45 @@ std::vector<Block> ReadBlocks(LineReader& reader, const std::string& keyword, in
   return blocks;
 }
 
-// Adds "rows[i] in domain" for one block of affine rows.
-void AddBlock(const Block& block, std::vector<AffineExpr>& rows, ProblemBuilder& builder) {
-  switch (block.domain) {
-    case Domain::kFree:
-      return;
+// Adds "e in domain" for one scalar row (L+, L-, L=; nothing for F). May change e.
+void AddScalarRow(Domain domain, AffineExpr& e, ProblemBuilder& builder) {
+  switch (domain) {
     case Domain::kNonnegative:
-      for (const AffineExpr& e : rows) builder.AddNonnegative(e);
+      builder.AddNonnegative(e);
       return;
     case Domain::kNonpositive:
-      for (AffineExpr& e : rows) {
-        for (Term& t : e.terms) t.coef = -t.coef;
-        e.constant = -e.constant;
-        builder.AddNonnegative(e);
-      }
+      for (Term& t : e.terms) t.coef = -t.coef;
+      e.constant = -e.constant;
+      builder.AddNonnegative(e);
       return;
     case Domain::kZero:
-      for (const AffineExpr& e : rows) builder.AddEquality(e.terms, -e.constant);
+      builder.AddEquality(e.terms, -e.constant);
       return;
-    case Domain::kSoc:
-      builder.AddSecondOrderCone(rows);
-      return;
-    case Domain::kRotated:
-      builder.AddRotatedCone(rows);
+    default:
       return;
   }
 }
 
-}  // namespace
+// Adds one block, whose row i fill(i, &expr) writes. Scalar domains go row by row, so that a large
+// block needs no array of its rows; a cone needs its rows together.
+template <typename Fill>
+void AddBlock(const Block& block, const Fill& fill, std::vector<AffineExpr>& cone, ProblemBuilder& builder) {
+  if (block.domain == Domain::kFree) return;
+  if (block.domain == Domain::kSoc || block.domain == Domain::kRotated) {
+    cone.resize(static_cast<std::size_t>(block.dim));
+    for (int i = 0; i < block.dim; ++i) fill(i, &cone[static_cast<std::size_t>(i)]);
+    if (block.domain == Domain::kSoc) builder.AddSecondOrderCone(cone);
+    else builder.AddRotatedCone(cone);
+    return;
+  }
+  AffineExpr e;
+  for (int i = 0; i < block.dim; ++i) {
+    fill(i, &e);
+    AddScalarRow(block.domain, e, builder);
+  }
+}
 
-CbfModel ReadCbf(std::istream& in) {
+CbfModel ReadCbfUnguarded(std::istream& in) {
   LineReader reader(in);
   CbfModel model;
   bool have_version = false, have_var = false, have_con = false;
@@ -188,8 +199,13 @@ CbfModel ReadCbf(std::istream& in) {
   int n = 0, m = 0;
   std::vector<Block> var_blocks, con_blocks;
   std::vector<std::pair<int, double>> objective;
-  std::vector<std::vector<Term>> a_rows;
-  std::vector<double> b;
+  // ACOORD as (row, column, value) and BCOORD as (row, value), grouped by row after reading.
+  struct Entry {
+    int row, col;
+    double value;
+  };
+  std::vector<Entry> a_entries;
+  std::vector<std::pair<int, double>> b_entries;
 
   std::string line;
   while (reader.Next(&line)) {
@@ -215,8 +231,6 @@ CbfModel ReadCbf(std::istream& in) {
       have_var = true;
     } else if (keyword == "CON") {
       con_blocks = ReadBlocks(reader, "CON", &m);
-      a_rows.assign(static_cast<std::size_t>(m), {});
-      b.assign(static_cast<std::size_t>(m), 0.0);
       have_con = true;
     } else if (keyword == "OBJACOORD" || keyword == "ACOORD" || keyword == "BCOORD") {
       if (!have_var) reader.Fail(keyword + " before VAR");
@@ -234,12 +248,12 @@ CbfModel ReadCbf(std::istream& in) {
           reader.ExpectFields(f, 3, "ACOORD entry");
           const int row = reader.Index(f[0], m, "constraint row");
           const int col = reader.Index(f[1], n, "variable");
-          a_rows[static_cast<std::size_t>(row)].push_back({col, reader.Real(f[2], "coefficient")});
+          a_entries.push_back({row, col, reader.Real(f[2], "coefficient")});
         } else {
           const auto f = reader.Fields("a BCOORD entry");
           reader.ExpectFields(f, 2, "BCOORD entry");
           const int row = reader.Index(f[0], m, "constraint row");
-          b[static_cast<std::size_t>(row)] += reader.Real(f[1], "constant");
+          b_entries.push_back({row, reader.Real(f[1], "constant")});
         }
       }
     } else if (keyword == "OBJBCOORD") {
@@ -263,30 +277,35 @@ CbfModel ReadCbf(std::istream& in) {
   for (const auto& [var, coef] : objective) {
     builder.SetObjectiveCoefficient(var, model.maximize ? -coef : coef);
   }
+  std::vector<AffineExpr> cone;
   int first = 0;
-  std::vector<AffineExpr> rows;
   for (const Block& block : var_blocks) {
-    if (block.domain == Domain::kFree) {
-      first += block.dim;
-      continue;
-    }
-    rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
-    for (int i = 0; i < block.dim; ++i) rows[static_cast<std::size_t>(i)].terms.push_back({first + i, 1.0});
-    AddBlock(block, rows, builder);
+    AddBlock(block, [first](int i, AffineExpr* e) {
+      e->terms.assign(1, Term{first + i, 1.0});
+      e->constant = 0.0;
+    }, cone, builder);
     first += block.dim;
   }
+
+  // Constraint rows: entries grouped by row (a counting sort keeps their order within a row).
+  std::vector<int> row_start(static_cast<std::size_t>(m) + 1, 0);
+  for (const Entry& e : a_entries) ++row_start[static_cast<std::size_t>(e.row) + 1];
+  for (int r = 0; r < m; ++r) row_start[static_cast<std::size_t>(r) + 1] += row_start[static_cast<std::size_t>(r)];
+  std::vector<Term> terms(a_entries.size());
+  {
+    std::vector<int> next(row_start.begin(), row_start.end() - 1);
+    for (const Entry& e : a_entries) terms[static_cast<std::size_t>(next[static_cast<std::size_t>(e.row)]++)] = {e.col, e.value};
+  }
+  a_entries = {};
+  std::vector<double> b(static_cast<std::size_t>(m), 0.0);
+  for (const auto& [row, value] : b_entries) b[static_cast<std::size_t>(row)] += value;
   first = 0;
   for (const Block& block : con_blocks) {
-    if (block.domain == Domain::kFree) {
-      first += block.dim;
-      continue;
-    }
-    rows.assign(static_cast<std::size_t>(block.dim), AffineExpr{});
-    for (int i = 0; i < block.dim; ++i) {
+    AddBlock(block, [&, first](int i, AffineExpr* e) {
       const auto r = static_cast<std::size_t>(first + i);
-      rows[static_cast<std::size_t>(i)] = AffineExpr{a_rows[r], b[r]};
-    }
-    AddBlock(block, rows, builder);
+      e->terms.assign(terms.begin() + row_start[r], terms.begin() + row_start[r + 1]);
+      e->constant = b[r];
+    }, cone, builder);
     first += block.dim;
   }
   model.problem = builder.Build();
@@ -296,6 +315,16 @@ CbfModel ReadCbf(std::istream& in) {
     throw std::invalid_argument(std::string("CBF: ") + e.what());
   }
   return model;
+}
+
+}  // namespace
+
+CbfModel ReadCbf(std::istream& in) {
+  try {
+    return ReadCbfUnguarded(in);
+  } catch (const std::bad_alloc&) {
+    throw std::invalid_argument("CBF: the problem the file declares does not fit in memory");
+  }
 }
 
 void WriteCbf(const Problem& problem, std::ostream& destination) {

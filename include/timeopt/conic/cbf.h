@@ -34,14 +34,15 @@ struct CbfModel {
 /// Parses CBF text (versions 1 to 4; only the subset above). Entries repeated within a section are
 /// summed. Throws std::invalid_argument naming the line and what is wrong (unknown or unsupported
 /// keyword, a section given twice, a count or index out of range, cone sizes not adding up, a number
-/// that is not finite, a size above 1e8). Cost: linear in the file's size and the declared sizes.
+/// that is not finite, a size above 1e7, a problem that does not fit in memory). Cost: linear in the
+/// file's size and the declared sizes.
 CbfModel ReadCbf(std::istream& in);
 
 /// Writes `problem` as CBF version 3: n free variables; the rows A x - b in L= followed by h - G x in
 /// the cones of problem.cones (L+, then Q, then QR), i.e. exactly A x = b and G x + s = h, s in K.
 /// Numbers are written with 17 significant digits, so ReadCbf gives back every value bit for bit
-/// (zeros are not written; a -0 reads back as 0). Throws std::invalid_argument if the problem fails Problem::Validate(), std::runtime_error if
-/// the stream fails.
+/// (zeros are not written; a -0 reads back as 0). Throws std::invalid_argument if the problem fails
+/// Problem::Validate(), std::runtime_error if the stream fails.
 void WriteCbf(const Problem& problem, std::ostream& out);
 
 }  // namespace timeopt::conic

@@ -15,9 +15,9 @@
 // integration is exact: no error is added between steps.
 //
 // What it reveals: the temporal stage's profile has a constant sddot per cell, so the reference
-// acceleration jumps between cells and at the ends of cruise phases. A vehicle with finite jerk cannot
-// follow a jump; with these gains its acceleration overshoots a jump of size D by 0.206 D (and its
-// velocity by 0.023 D at bandwidth 10 rad/s, 0.23 D / bandwidth). The acceleration-change bound lambda_a of the temporal problem
+// acceleration jumps between cells and at the ends of cruise phases. A vehicle with finite jerk
+// cannot follow a jump; with these gains its acceleration overshoots a jump of size D by 0.206 D and
+// its velocity by 0.23 D / bandwidth. The acceleration-change bound lambda_a of the temporal problem
 // (TemporalLimits::max_acceleration_change) limits the jumps and therefore the overshoot.
 
 #include <functional>
@@ -112,7 +112,7 @@ class QuadrotorSim {
 
   /// Flies `reference` for duration() s plus the settle time and checks `limits`' velocity and
   /// acceleration, the vehicle starting in the reference's initial state plus the options' initial
-  /// errors. Steps: ceil((duration + settle_time) / time_step), with 1e-9 relative slack. After the
+  /// errors. Steps: ceil((duration + settle_time) / time_step), with 1e-6 relative slack. After the
   /// reference ends, it continues at its final velocity with zero acceleration (a hover for
   /// rest-to-rest trajectories). Throws std::invalid_argument if the limits are not positive and
   /// finite, the flight would take more than 1e8 steps, or the reference returns a non-finite state.
