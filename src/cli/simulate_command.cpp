@@ -1,9 +1,10 @@
 // `timeopt simulate PROBLEM.json [--solver socp|ipopt] [--bandwidth W] [--control-rate HZ]
 //                   [--settle-time S] [--max-jerk J] [--output REPORT.json] [--states STATES.csv]`
-// Solves the temporal problem, flies the trajectory with the jerk-input quadrotor of sim/ and writes
-// the feasibility report. Exit codes: 0 every velocity and acceleration limit held during the flight,
-// 1 a limit was exceeded (one line on stderr) or the solve failed, 3 the temporal problem is
-// infeasible, 2 invalid input.
+// `timeopt simulate --samples TRAJ.csv --max-velocity V --max-acceleration A [same options]`
+// Solves the temporal problem (or takes another planner's samples), flies the trajectory with the
+// jerk-input quadrotor of sim/ and writes the feasibility report. Exit codes: 0 every velocity and
+// acceleration limit held during the flight, 1 a limit was exceeded (one line on stderr) or the
+// solve failed, 3 the temporal problem is infeasible, 2 invalid input.
 
 #include <cmath>
 #include <iomanip>
@@ -27,6 +28,9 @@ namespace {
 
 struct SimulateArgs {
   std::string problem;
+  std::string samples;
+  double max_velocity = 0.0;
+  double max_acceleration = 0.0;
   std::string solver = "socp";
   double bandwidth = 10.0;
   double control_rate = 1000.0;
@@ -50,43 +54,70 @@ std::string StatesCsv(const std::vector<SimState>& states) {
 }
 
 int RunSimulate(const SimulateArgs& args) {
-  const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+  if (args.problem.empty() == args.samples.empty()) {
+    throw std::invalid_argument("give either PROBLEM.json or --samples TRAJ.csv");
+  }
+  if (!args.samples.empty() && !(args.max_velocity > 0.0 && args.max_acceleration > 0.0)) {
+    throw std::invalid_argument("--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis)");
+  }
+  if (!std::isfinite(args.control_rate) || !std::isfinite(args.bandwidth) || !std::isfinite(args.settle_time) ||
+      !std::isfinite(args.max_jerk) || !std::isfinite(args.max_velocity) || !std::isfinite(args.max_acceleration)) {
+    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time, --max-jerk, --max-velocity and "
+                                "--max-acceleration must be finite");
+  }
+  if (args.control_rate < 10.0 * args.bandwidth) {
+    throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
+                                "time constant 1 / bandwidth)");
+  }
   QuadrotorSimOptions options;
   options.bandwidth = args.bandwidth;
   options.time_step = 1.0 / args.control_rate;
   options.settle_time = args.settle_time;
   if (args.max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   options.record_states = !args.states.empty();
-  if (!std::isfinite(args.control_rate) || !std::isfinite(args.bandwidth) || !std::isfinite(args.settle_time) ||
-      !std::isfinite(args.max_jerk)) {
-    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time and --max-jerk must be finite");
-  }
-  if (args.control_rate < 10.0 * args.bandwidth) {
-    throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
-                                "time constant 1 / bandwidth)");
-  }
   const QuadrotorSim sim(options);  // invalid options throw before the solve
 
-  const auto solver = MakeTemporalSolver(args.solver == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp);
-  const TemporalResult result = solver->Solve(problem);
-  if (!result.is_success()) {
-    std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
-    if (result.status == TemporalStatus::kInfeasible) return kExitInfeasible;
-    if (result.status == TemporalStatus::kInvalidInput) return kExitInvalidInput;
-    return kExitFailure;
-  }
-  // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
+  nlohmann::ordered_json json;
+  json["feasible"] = nullptr;  // first in the output; set below
+  json["message"] = "";
   FeasibilityReport report;
   try {
-    report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
+    if (!args.samples.empty()) {
+      // Another planner's trajectory: the vehicle starts in its first sample.
+      const std::vector<TrajectoryState> samples = ReadSamplesCsv(args.samples);
+      TemporalLimits limits;
+      limits.max_velocity.setConstant(args.max_velocity);
+      limits.max_acceleration.setConstant(args.max_acceleration);
+      const double duration = samples.back().t - samples.front().t;
+      report = sim.Run(SampledReference(samples), duration, limits);
+      json["samples"] = static_cast<int>(samples.size());
+      json["total_time"] = duration;
+    } else {
+      const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+      const auto solver =
+          MakeTemporalSolver(args.solver == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp);
+      const TemporalResult result = solver->Solve(problem);
+      if (!result.is_success()) {
+        std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
+        if (result.status == TemporalStatus::kInfeasible) return kExitInfeasible;
+        if (result.status == TemporalStatus::kInvalidInput) return kExitInvalidInput;
+        return kExitFailure;
+      }
+      // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
+      report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
+      json["total_time"] = result.total_time;
+      // The reference itself, sampled densely by the temporal stage (no tracking).
+      json["reference_max_velocity_ratio"] = result.max_velocity_ratio;
+      json["reference_max_acceleration_ratio"] = result.max_acceleration_ratio;
+    }
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument((args.states.empty() ? "" : "--states: ") + std::string(e.what()));
+    const std::string what = e.what();
+    const bool recording = !args.states.empty() && what.find("record_states") != std::string::npos;
+    throw std::invalid_argument((recording ? "--states: " : "") + what);
   }
 
-  nlohmann::ordered_json json;
   json["feasible"] = report.feasible;
   json["message"] = report.message;
-  json["total_time"] = result.total_time;
   json["max_velocity_ratio"] = report.max_velocity_ratio;
   json["max_velocity_time"] = report.max_velocity_time;
   json["max_acceleration_ratio"] = report.max_acceleration_ratio;
@@ -100,9 +131,6 @@ int RunSimulate(const SimulateArgs& args) {
   json["steps"] = report.steps;
   json["bandwidth"] = args.bandwidth;
   json["control_rate"] = args.control_rate;
-  // The reference itself, sampled densely by the temporal stage (no tracking).
-  json["reference_max_velocity_ratio"] = result.max_velocity_ratio;
-  json["reference_max_acceleration_ratio"] = result.max_acceleration_ratio;
   const std::string text = json.dump(2) + "\n";
   if (args.output.empty()) std::cout << text;
   else WriteTextFile(args.output, text);
@@ -121,7 +149,13 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
   CLI::App* sub = app.add_subcommand(
       "simulate", "Solve a temporal problem and fly the trajectory with a jerk-input quadrotor under "
                   "feedback; report whether every limit held in continuous time");
-  sub->add_option("PROBLEM", args->problem, "Problem JSON file (as for `temporal`)")->required();
+  sub->add_option("PROBLEM", args->problem, "Problem JSON file (as for `temporal`)");
+  sub->add_option("--samples", args->samples,
+                  "Fly a given trajectory instead: samples CSV t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz] "
+                  "(e.g. from `temporal --samples` or another planner)");
+  sub->add_option("--max-velocity", args->max_velocity, "With --samples: velocity limit per axis, m/s");
+  sub->add_option("--max-acceleration", args->max_acceleration,
+                  "With --samples: acceleration limit per axis, m/s^2");
   sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
       ->check(CLI::IsMember({"socp", "ipopt"}))
       ->capture_default_str();

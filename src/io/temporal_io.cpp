@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -155,6 +156,69 @@ std::string SamplesToCsv(const std::vector<TrajectoryState>& samples) {
     }
   }
   return out;
+}
+
+std::vector<TrajectoryState> ParseSamplesCsv(const std::string& csv_text, const std::string& source) {
+  std::istringstream in(csv_text);
+  std::string line;
+  int line_number = 0, columns = 0;
+  std::vector<TrajectoryState> samples;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::string compact;
+    for (char ch : line) {
+      if (ch != ' ' && ch != '\t') compact += ch;
+    }
+    if (compact.empty() || compact[0] == '#') continue;
+    const std::string where = source + " line " + std::to_string(line_number);
+    if (columns == 0) {
+      if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz") columns = 13;
+      else if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az") columns = 10;
+      else throw std::invalid_argument(where + ": expected the header t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz]");
+      continue;
+    }
+    std::vector<double> values;
+    std::stringstream fields(compact);
+    std::string field;
+    while (std::getline(fields, field, ',')) {
+      char* end = nullptr;
+      const double v = std::strtod(field.c_str(), &end);
+      if (field.empty() || *end != '\0') throw std::invalid_argument(where + ": '" + field + "' is not a number");
+      if (!std::isfinite(v)) throw std::invalid_argument(where + ": '" + field + "' is not finite");
+      values.push_back(v);
+    }
+    if (static_cast<int>(values.size()) != columns) {
+      throw std::invalid_argument(where + ": expected " + std::to_string(columns) + " values, got " +
+                                  std::to_string(values.size()));
+    }
+    TrajectoryState s;
+    s.t = values[0];
+    s.position = Eigen::Vector3d(values[1], values[2], values[3]);
+    s.velocity = Eigen::Vector3d(values[4], values[5], values[6]);
+    s.acceleration = Eigen::Vector3d(values[7], values[8], values[9]);
+    if (columns == 13) s.jerk = Eigen::Vector3d(values[10], values[11], values[12]);
+    if (!samples.empty() && !(s.t > samples.back().t)) {
+      char text[96];
+      std::snprintf(text, sizeof(text), "%.10g after %.10g", s.t, samples.back().t);
+      throw std::invalid_argument(where + ": t must increase strictly (" + text + ")");
+    }
+    samples.push_back(s);
+  }
+  if (columns == 0) throw std::invalid_argument(source + ": no header t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz]");
+  if (samples.size() < 2) {
+    throw std::invalid_argument(source + ": expected at least 2 samples, got " + std::to_string(samples.size()));
+  }
+  if (columns == 10) {
+    for (size_t k = 0; k + 1 < samples.size(); ++k) {
+      samples[k].jerk = (samples[k + 1].acceleration - samples[k].acceleration) / (samples[k + 1].t - samples[k].t);
+    }
+  }
+  return samples;
+}
+
+std::vector<TrajectoryState> ReadSamplesCsv(const std::string& path) {
+  return ParseSamplesCsv(ReadTextFile(path), path);
 }
 
 }  // namespace timeopt

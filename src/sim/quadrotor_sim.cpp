@@ -245,4 +245,43 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   return report;
 }
 
+QuadrotorSim::Reference SampledReference(std::vector<TrajectoryState> samples) {
+  if (samples.size() < 2) {
+    throw std::invalid_argument("SampledReference: expected at least 2 samples, got " +
+                                std::to_string(samples.size()));
+  }
+  const double t0 = samples.front().t;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    TrajectoryState& s = samples[k];
+    if (!std::isfinite(s.t) || !s.position.allFinite() || !s.velocity.allFinite() ||
+        !s.acceleration.allFinite() || !s.jerk.allFinite()) {
+      throw std::invalid_argument("SampledReference: sample " + std::to_string(k) + " is not finite");
+    }
+    if (k > 0 && !(s.t > samples[k - 1].t)) {
+      throw std::invalid_argument("SampledReference: sample times must increase strictly (sample " +
+                                  std::to_string(k) + ")");
+    }
+  }
+  for (TrajectoryState& s : samples) s.t -= t0;
+  return [samples = std::move(samples)](double t) {
+    // The last sample at or before t (the first for t < 0).
+    const auto after = std::upper_bound(samples.begin(), samples.end(), t,
+                                        [](double value, const TrajectoryState& s) { return value < s.t; });
+    if (after == samples.end()) {
+      TrajectoryState r = samples.back();
+      r.t = t;
+      return r;
+    }
+    const TrajectoryState& s = after == samples.begin() ? samples.front() : *(after - 1);
+    const double tau = std::max(0.0, t - s.t);
+    TrajectoryState r;
+    r.t = t;
+    r.jerk = s.jerk;
+    r.acceleration = s.acceleration + tau * s.jerk;
+    r.velocity = s.velocity + tau * (s.acceleration + 0.5 * tau * s.jerk);
+    r.position = s.position + tau * (s.velocity + tau * (0.5 * s.acceleration + tau * s.jerk / 6.0));
+    return r;
+  };
+}
+
 }  // namespace timeopt

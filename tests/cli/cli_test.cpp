@@ -218,6 +218,23 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_THAT(json, HasSubstr("\"feasible\": true"));
   EXPECT_GT(JsonNumber(json, "total_time"), 7.0);
 
+  // The same line written as 1 kHz samples and flown from them, as another planner's output would be:
+  // the same overshoot (the vehicle starts on the first sample, already at amax).
+  r = RunCli("temporal " + line + " -o " + Path("t.json") + " --samples " + Path("line.csv") + " --rate 1000");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCli("simulate --samples " + Path("line.csv") + " --max-velocity 2 --max-acceleration 1 -o " +
+             Path("ss.json"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  json = ReadTextFile(Path("ss.json"));
+  EXPECT_NEAR(JsonNumber(json, "max_acceleration_ratio"), 1.208, 0.005);
+  EXPECT_GE(JsonNumber(json, "samples"), 7001);  // t = 0, 0.001, ... and the final state at T
+  r = RunCli("simulate --samples " + Path("line.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--samples needs --max-velocity and --max-acceleration"));
+  r = RunCli("simulate " + line + " --samples " + Path("line.csv") + " --max-velocity 2 --max-acceleration 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("give either PROBLEM.json or --samples"));
+
   r = RunCli("simulate " + line + " --control-rate 50");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("--control-rate must be at least 10 x --bandwidth"));

@@ -222,6 +222,40 @@ TEST(QuadrotorSim, FlyStartsFromTheProblemsBoundaryState) {
   EXPECT_NEAR(flown.max_acceleration_ratio, 1.0 + JumpAccelerationOvershoot(), kZohTolerance * 1.0);
 }
 
+// Samples of a cubic hold its (constant) jerk between them, so the sampled reference is the cubic
+// itself, shifted to start at 0: the flight matches the one on the function to rounding.
+TEST(QuadrotorSim, SampledReferenceOfACubicIsTheCubic) {
+  const auto cubic = [](double t) {
+    TrajectoryState r{t};
+    r.position = Eigen::Vector3d(0.5, -0.2, 0.1) * t * t * t + Eigen::Vector3d(1.0, 0.0, 0.0);
+    r.velocity = 3.0 * Eigen::Vector3d(0.5, -0.2, 0.1) * t * t;
+    r.acceleration = 6.0 * Eigen::Vector3d(0.5, -0.2, 0.1) * t;
+    r.jerk = 6.0 * Eigen::Vector3d(0.5, -0.2, 0.1);
+    return r;
+  };
+  std::vector<TrajectoryState> samples;
+  for (int k = 0; k <= 20; ++k) {
+    TrajectoryState s = cubic(0.1 * k);
+    s.t += 3.0;  // another planner's clock
+    samples.push_back(s);
+  }
+  const QuadrotorSim::Reference sampled = SampledReference(samples);
+  for (double t : {0.0, 0.05, 0.123, 1.0, 1.999}) {
+    EXPECT_LT((sampled(t).position - cubic(t).position).norm(), 1e-13) << t;
+    EXPECT_LT((sampled(t).acceleration - cubic(t).acceleration).norm(), 1e-13) << t;
+  }
+  const QuadrotorSim sim(Options());
+  const FeasibilityReport a = sim.Run(sampled, 2.0, Limits(10.0, 10.0));
+  const FeasibilityReport b = sim.Run(cubic, 2.0, Limits(10.0, 10.0));
+  EXPECT_NEAR(a.max_velocity_ratio, b.max_velocity_ratio, 1e-12);
+  EXPECT_NEAR(a.max_acceleration_ratio, b.max_acceleration_ratio, 1e-12);
+  EXPECT_LT(a.max_position_error, 1e-11);
+
+  EXPECT_THROW(SampledReference({samples[0]}), std::invalid_argument);
+  samples[3].t = samples[2].t;
+  EXPECT_THROW(SampledReference(samples), std::invalid_argument);
+}
+
 TEST(QuadrotorSim, JerkLimitClipsEveryCommand) {
   QuadrotorSimOptions o = Options();
   o.initial_position_error = Eigen::Vector3d(0.1, -0.2, 0.0);

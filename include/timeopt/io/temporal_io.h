@@ -34,4 +34,12 @@ std::string TemporalResultToJson(const TemporalResult& result, int indent = 2);
 // Header t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz then one row per state, full precision.
 std::string SamplesToCsv(const std::vector<TrajectoryState>& samples);
 
+// Reads samples written by SamplesToCsv, or by another planner in the same columns; the jerk columns
+// may be left out (header t,x,y,z,vx,vy,vz,ax,ay,az), and then jerk is the difference quotient of
+// the acceleration to the next sample (0 on the last). At least 2 rows, t finite and strictly
+// increasing, every value finite. Throws std::invalid_argument naming the source and line, or
+// timeopt::FileError when the file cannot be read.
+std::vector<TrajectoryState> ParseSamplesCsv(const std::string& csv_text, const std::string& source);
+std::vector<TrajectoryState> ReadSamplesCsv(const std::string& path);
+
 }  // namespace timeopt

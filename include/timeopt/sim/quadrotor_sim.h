@@ -137,4 +137,13 @@ class QuadrotorSim {
   Options options_;
 };
 
+/// A reference through samples (e.g. ReadSamplesCsv of another planner's output), for
+/// QuadrotorSim::Run with duration samples.back().t - samples.front().t: time is shifted so that the
+/// first sample is at 0, and between samples k and k+1 the reference is the cubic that starts in
+/// sample k with its jerk held (exact when the jerk is constant between samples; otherwise the
+/// reference jumps slightly at each sample, which the feedback absorbs). At and after the last
+/// sample it is the last sample's state. Throws std::invalid_argument for fewer than 2 samples, times
+/// not strictly increasing, or a non-finite value.
+QuadrotorSim::Reference SampledReference(std::vector<TrajectoryState> samples);
+
 }  // namespace timeopt
