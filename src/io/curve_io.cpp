@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -26,6 +27,24 @@ double FiniteNumber(const nlohmann::json& j, const std::string& field) {
   const double v = j.get<double>();
   if (!std::isfinite(v)) throw std::invalid_argument(field + ": expected a finite number");
   return v;
+}
+
+std::vector<double> CsvNumbers(const std::string& row, const std::string& where) {
+  std::vector<double> values;
+  std::stringstream fields(row);
+  std::string field;
+  while (std::getline(fields, field, ',')) {
+    const auto first = field.find_first_not_of(" \t");
+    const auto last = field.find_last_not_of(" \t");
+    field = first == std::string::npos ? std::string() : field.substr(first, last - first + 1);
+    // strtod, not stod: stod rejects subnormal values (ERANGE on underflow).
+    char* end = nullptr;
+    const double v = std::strtod(field.c_str(), &end);
+    if (field.empty() || *end != '\0') throw std::invalid_argument(where + ": '" + field + "' is not a number");
+    if (!std::isfinite(v)) throw std::invalid_argument(where + ": '" + field + "' is not finite");
+    values.push_back(v);
+  }
+  return values;
 }
 
 std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field,
@@ -163,23 +182,7 @@ Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& sour
       if (compact == "x,y,z") continue;
     }
     const std::string where = source + " line " + std::to_string(line_number);
-    std::vector<double> values;
-    std::stringstream fields(trimmed);
-    std::string field;
-    while (std::getline(fields, field, ',')) {
-      size_t used = 0;
-      double v = 0.0;
-      try {
-        v = std::stod(field, &used);
-      } catch (const std::exception&) {
-        throw std::invalid_argument(where + ": '" + field + "' is not a number");
-      }
-      if (field.find_first_not_of(" \t", used) != std::string::npos) {
-        throw std::invalid_argument(where + ": '" + field + "' is not a number");
-      }
-      if (!std::isfinite(v)) throw std::invalid_argument(where + ": '" + field + "' is not finite");
-      values.push_back(v);
-    }
+    const std::vector<double> values = internal::CsvNumbers(trimmed, where);
     if (values.size() != 3) {
       throw std::invalid_argument(where + ": expected 3 values x,y,z, got " +
                                   std::to_string(values.size()));

@@ -1,6 +1,6 @@
 #pragma once
 
-// Library-internal JSON helpers shared by the readers of curve and problem files.
+// Library-internal JSON and CSV helpers shared by the readers of curve, problem and sample files.
 
 #include <string>
 #include <vector>
@@ -22,5 +22,9 @@ double FiniteNumber(const nlohmann::json& j, const std::string& field);
 // An array of finite numbers of the given size (any size when expected_size < 0).
 std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field,
                                 int expected_size = -1);
+
+// The comma-separated numbers of one CSV row (blanks around fields ignored); throws
+// std::invalid_argument "<where>: 'field' is not a number" (or "is not finite").
+std::vector<double> CsvNumbers(const std::string& row, const std::string& where);
 
 }  // namespace timeopt::internal

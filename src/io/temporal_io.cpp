@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -178,16 +177,7 @@ std::vector<TrajectoryState> ParseSamplesCsv(const std::string& csv_text, const 
       else throw std::invalid_argument(where + ": expected the header t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz]");
       continue;
     }
-    std::vector<double> values;
-    std::stringstream fields(compact);
-    std::string field;
-    while (std::getline(fields, field, ',')) {
-      char* end = nullptr;
-      const double v = std::strtod(field.c_str(), &end);
-      if (field.empty() || *end != '\0') throw std::invalid_argument(where + ": '" + field + "' is not a number");
-      if (!std::isfinite(v)) throw std::invalid_argument(where + ": '" + field + "' is not finite");
-      values.push_back(v);
-    }
+    const std::vector<double> values = internal::CsvNumbers(compact, where);
     if (static_cast<int>(values.size()) != columns) {
       throw std::invalid_argument(where + ": expected " + std::to_string(columns) + " values, got " +
                                   std::to_string(values.size()));
