@@ -1,20 +1,42 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages timeopt needs that are not installed yet.
-# Idempotent: when everything is present it only runs dpkg-query and exits.
+#
+#   scripts/install_deps.sh          everything: the library, the CLI, tests, benchmarks, experiments
+#   scripts/install_deps.sh main     only what the library and the `timeopt` CLI need (the main job)
+#
+# Idempotent: when everything is present it only runs dpkg-query and exits. Each package is listed
+# with what uses it, so that a new find_package/pkg_check_modules or script tool gets its line here
+# (scripts/check_fresh_machine.sh catches a forgotten one on a bare Debian 12).
 set -euo pipefail
 
-PACKAGES=(
-  build-essential cmake pkg-config
-  libeigen3-dev
-  libceres-dev
-  liboctomap-dev libdynamicedt3d-dev
-  coinor-libipopt-dev
-  libgtest-dev libbenchmark-dev
-  nlohmann-json3-dev libcli11-dev
-  libcairo2-dev
-  python3-matplotlib
-  python3-cvxopt python3-numpy
+group="${1:-all}"
+case "$group" in
+  main | all) ;;
+  *) echo "install_deps: unknown group '$group' (expected 'main' or 'all')" >&2; exit 2 ;;
+esac
+
+# The library and the CLI (CMakeLists.txt, top part).
+MAIN_PACKAGES=(
+  build-essential cmake pkg-config  # compiler, CMake, pkg_check_modules
+  libeigen3-dev                     # find_package(Eigen3)
+  libceres-dev                      # find_package(Ceres): the spatial stage
+  liboctomap-dev                    # find_package(octomap): maps
+  coinor-libipopt-dev               # pkg_check_modules(ipopt): the NLP backend
+  nlohmann-json3-dev                # find_package(nlohmann_json): the JSON contract
+  libcli11-dev                      # find_package(CLI11): the command line
+  libcairo2-dev                     # pkg_check_modules(cairo): PNG plots
+  fonts-dejavu-core                 # a font for the plots' text (a minimal root may have none)
 )
+# Tests, benchmarks and experiments (TIMEOPT_BUILD_TESTS / _BENCHMARKS / _EXPERIMENTS).
+TEST_PACKAGES=(
+  libgtest-dev libgmock-dev         # find_package(GTest): GTest::gtest_main and GTest::gmock
+  libbenchmark-dev                  # find_package(benchmark): benchmarks/
+  libdynamicedt3d-dev               # find_package(dynamicEDT3D): the ESDF comparison test
+  python3-cvxopt python3-numpy      # tests/temporal/cvxopt_cross_check.py (second solver)
+)
+
+PACKAGES=("${MAIN_PACKAGES[@]}")
+if [[ "$group" == all ]]; then PACKAGES+=("${TEST_PACKAGES[@]}"); fi
 
 missing=()
 for pkg in "${PACKAGES[@]}"; do
@@ -25,7 +47,7 @@ for pkg in "${PACKAGES[@]}"; do
 done
 
 if [[ ${#missing[@]} -eq 0 ]]; then
-  echo "install_deps: all ${#PACKAGES[@]} packages present"
+  echo "install_deps: all ${#PACKAGES[@]} packages of group '$group' present"
   exit 0
 fi
 
@@ -40,6 +62,12 @@ if [[ "$(id -u)" -ne 0 ]]; then
 fi
 
 echo "install_deps: installing ${missing[*]}"
+# Under an empty environment (env -i) bash's default PATH is not exported and has no sbin folders,
+# where dpkg finds ldconfig and start-stop-daemon.
+case ":${PATH:-}:" in
+  *:/usr/sbin:*) export PATH ;;
+  *) export PATH="/usr/local/sbin:/usr/sbin:/sbin:${PATH:-/usr/local/bin:/usr/bin:/bin}" ;;
+esac
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -8,9 +8,13 @@
 #     velocity and acceleration plot against time (results/waypoints/profile.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/install_deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j2 --target timeopt_cli
+export PATH  # under env -i bash has a default PATH but does not export it to the tools it runs
+# Only what the main job runs: the library and the CLI. Tests, benchmarks and experiments are off,
+# so a missing test-only package can never stop it (scripts/test.sh turns them back on).
+./scripts/install_deps.sh main
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DTIMEOPT_BUILD_TESTS=OFF \
+  -DTIMEOPT_BUILD_BENCHMARKS=OFF -DTIMEOPT_BUILD_EXPERIMENTS=OFF
+cmake --build build -j"$(nproc)" --target timeopt_cli
 mkdir -p results
 ./build/timeopt plan
 ./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 \

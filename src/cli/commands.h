@@ -15,6 +15,13 @@ constexpr int kExitFailure = 1;
 constexpr int kExitInvalidInput = 2;
 constexpr int kExitInfeasible = 3;
 
+// Said next to a flight whose limits were exceeded, so that a reader of the summary knows what it
+// means: the plan satisfies its limits, the jerk-input vehicle cannot follow its acceleration steps.
+inline constexpr const char* kFlightNote =
+    "expected without a jerk limit: the planned trajectory holds its limits, but its acceleration "
+    "steps between cells and a jerk-input vehicle overshoots at each step (README, 'Verification "
+    "by simulation')";
+
 using Runner = std::function<int()>;
 
 void RegisterCurveCommand(CLI::App& app, Runner& run);

@@ -257,6 +257,7 @@ int RunPlan(PlanArgs args) {
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},
                            {"max_position_error", flight.max_position_error}};
+      if (!flight.feasible) summary["flight"]["note"] = kFlightNote;
     } catch (const std::invalid_argument& e) {
       summary["flight"] = {{"error", e.what()}};
     }

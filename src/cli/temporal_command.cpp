@@ -142,6 +142,7 @@ int RunWaypoints(const WaypointsArgs& args) {
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
           << ", max |a|/amax " << flight.max_acceleration_ratio << " ("
           << (flight.feasible ? "limits hold" : "limits exceeded") << "; see `timeopt simulate`)";
+    if (!flight.feasible) flown << "\n  note: " << kFlightNote;
   } catch (const std::invalid_argument& e) {
     flown << "not flown in simulation: " << e.what();
   }

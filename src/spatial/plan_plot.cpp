@@ -79,8 +79,8 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
   // Speed colour bar and caption.
   char caption[200];
   std::snprintf(caption, sizeof(caption),
-                "speed along the trajectory (T = %.2f s); map slice at z = %.2f m, black: obstacle; "
-                "green: start, purple: goal",
+                "speed along the trajectory (T = %.2f s); green: start, purple: goal\n"
+                "map slice at z = %.2f m: black obstacle; grey to white: distance to it, 0 to 2 m",
                 trajectory.duration(), height);
   image.DrawColourBar(SpeedColour, "0 m/s", internal::FormatValue(vmax, "m/s"), caption);
   image.WritePng(path);
