@@ -13,7 +13,7 @@
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/map_generators.h"
 #include "timeopt/spatial/path_search.h"
-#include "timeopt/spatial/planner.h"
+#include "timeopt/planner/planner.h"
 #include "timeopt/spatial/spatial_optimizer.h"
 
 namespace {

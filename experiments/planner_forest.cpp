@@ -21,10 +21,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "timeopt/io/plot.h"
+#include "timeopt/viz/plot.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
-#include "timeopt/spatial/planner.h"
+#include "timeopt/planner/planner.h"
 
 namespace {
 

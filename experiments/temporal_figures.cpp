@@ -19,7 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "timeopt/curve/interpolation.h"
-#include "timeopt/io/plot.h"
+#include "timeopt/viz/plot.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 

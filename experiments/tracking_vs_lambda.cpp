@@ -20,7 +20,7 @@
 
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
-#include "timeopt/io/plot.h"
+#include "timeopt/viz/plot.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
 
@@ -101,7 +101,8 @@ int main(int argc, char** argv) {
         std::cerr << curves[c].name << " lambda " << (lambda ? *lambda : 0.0) << ": " << r.message << "\n";
         continue;
       }
-      const FeasibilityReport f = sim.Fly(Trajectory(p.curve, r.profile), p);
+      const FeasibilityReport f = sim.Fly(Trajectory(p.curve, r.profile), p.limits,
+                                              p.boundary.start_velocity, p.boundary.start_acceleration);
       csv << "," << r.total_time << "," << r.max_acceleration_ratio << "," << f.max_velocity_ratio << ","
           << f.max_acceleration_ratio << "," << (f.feasible ? 1 : 0) << "\n";
       std::cout << curves[c].name << " lambda_a ";

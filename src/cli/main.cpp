@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "commands.h"
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 #include "timeopt/version.h"
 
 int main(int argc, char** argv) {

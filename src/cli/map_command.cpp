@@ -12,7 +12,7 @@
 
 #include "commands.h"
 #include "timeopt/map/esdf.h"
-#include "timeopt/map/esdf_slice.h"
+#include "timeopt/viz/esdf_slice.h"
 #include "timeopt/map/map_generators.h"
 #include "timeopt/map/occupancy_map.h"
 

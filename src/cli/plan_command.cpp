@@ -26,13 +26,14 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
+#include "timeopt/core/files.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/sim/quadrotor_sim.h"
-#include "timeopt/spatial/plan_plot.h"
-#include "timeopt/spatial/planner.h"
+#include "timeopt/viz/plan_plot.h"
+#include "timeopt/planner/planner.h"
 #include "timeopt/trajectory/trajectory.h"
 
 namespace timeopt::cli {
@@ -179,14 +180,6 @@ int ExitCodeFor(PlanStatus status) {
   }
 }
 
-void EnsureParentDirectory(const std::string& file) {
-  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
-  if (parent.empty()) return;
-  std::error_code ec;
-  std::filesystem::create_directories(parent, ec);
-  if (ec) throw FileError("cannot create directory '" + parent.string() + "': " + ec.message());
-}
-
 int RunPlan(PlanArgs args) {
   const bool defaults = args.map.empty();
   if (defaults) {
@@ -249,10 +242,9 @@ int RunPlan(PlanArgs args) {
   if (ok) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
     // The trajectory flown by the default jerk-input quadrotor from a hover (see `timeopt simulate`).
-    TemporalProblem rest_to_rest;
-    rest_to_rest.limits = options.limits;
     try {
-      const FeasibilityReport flight = QuadrotorSim().Fly(trajectory, rest_to_rest);
+      const FeasibilityReport flight = QuadrotorSim().Fly(trajectory, options.limits,
+                                                          Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
       summary["flight"] = {{"feasible", flight.feasible},
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},

@@ -104,7 +104,8 @@ int RunSimulate(const SimulateArgs& args) {
         return kExitFailure;
       }
       // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
-      report = sim.Fly(Trajectory(problem.curve, result.profile), problem);
+      report = sim.Fly(Trajectory(problem.curve, result.profile), problem.limits,
+                       problem.boundary.start_velocity, problem.boundary.start_acceleration);
       json["total_time"] = result.total_time;
       // The reference itself, sampled densely by the temporal stage (no tracking).
       json["reference_max_velocity_ratio"] = result.max_velocity_ratio;

@@ -14,8 +14,8 @@
 #include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
-#include "timeopt/io/errors.h"
-#include "timeopt/io/profile_plot.h"
+#include "timeopt/core/errors.h"
+#include "timeopt/viz/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
@@ -137,7 +137,8 @@ int RunWaypoints(const WaypointsArgs& args) {
   const QuadrotorSim sim;
   std::ostringstream flown;
   try {
-    const FeasibilityReport flight = sim.Fly(trajectory, problem);
+    const FeasibilityReport flight = sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity,
+                                                   problem.boundary.start_acceleration);
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
           << ", max |a|/amax " << flight.max_acceleration_ratio << " ("

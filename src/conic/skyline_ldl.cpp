@@ -1,4 +1,4 @@
-#include "timeopt/conic/skyline_ldl.h"
+#include "skyline_ldl.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -12,8 +12,8 @@
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
 
-#include "timeopt/conic/skyline_ldl.h"
-#include "timeopt/conic/sparse_ldl.h"
+#include "skyline_ldl.h"
+#include "sparse_ldl.h"
 
 namespace timeopt::conic {
 

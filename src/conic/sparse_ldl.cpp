@@ -1,4 +1,4 @@
-#include "timeopt/conic/sparse_ldl.h"
+#include "sparse_ldl.h"
 
 #include <algorithm>
 #include <cmath>

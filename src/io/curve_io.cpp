@@ -119,23 +119,6 @@ CurveFile CurveFromJson(const nlohmann::json& j, const std::string& context) {
 
 }  // namespace internal
 
-std::string ReadTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw FileError("cannot open '" + path + "' for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw FileError("error while reading '" + path + "'");
-  return ss.str();
-}
-
-void WriteTextFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw FileError("cannot open '" + path + "' for writing");
-  out << text;
-  out.flush();
-  if (!out) throw FileError("error while writing '" + path + "'");
-}
-
 CurveFile ParseCurveJson(const std::string& json_text, const std::string& context) {
   return internal::CurveFromJson(internal::ParseJsonText(json_text, context), context);
 }

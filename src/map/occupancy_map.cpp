@@ -21,7 +21,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 
 namespace timeopt {
 namespace {

@@ -72,24 +72,26 @@ QuadrotorSim::QuadrotorSim(const Options& options) : options_(options) {
   if (!options_.IsValid(&error)) throw std::invalid_argument("QuadrotorSimOptions: " + error);
 }
 
-FeasibilityReport QuadrotorSim::Run(const Trajectory& reference, const TemporalLimits& limits) const {
+FeasibilityReport QuadrotorSim::Run(const Trajectory& reference, const VehicleLimits& limits) const {
   return Run([&reference](double t) { return reference.Evaluate(t); }, reference.duration(), limits);
 }
 
 FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
-                                    const TemporalLimits& limits) const {
+                                    const VehicleLimits& limits) const {
   if (!reference) throw std::invalid_argument("QuadrotorSim::Run: the reference is empty");
   const TrajectoryState start = reference(0.0);
   return RunFrom(reference, duration, limits, start.velocity, start.acceleration);
 }
 
-FeasibilityReport QuadrotorSim::Fly(const Trajectory& reference, const TemporalProblem& problem) const {
+FeasibilityReport QuadrotorSim::Fly(const Trajectory& reference, const VehicleLimits& limits,
+                                    const Eigen::Vector3d& start_velocity,
+                                    const Eigen::Vector3d& start_acceleration) const {
   return RunFrom([&reference](double t) { return reference.Evaluate(t); }, reference.duration(),
-                 problem.limits, problem.boundary.start_velocity, problem.boundary.start_acceleration);
+                 limits, start_velocity, start_acceleration);
 }
 
 FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double duration,
-                                        const TemporalLimits& limits, const Eigen::Vector3d& start_velocity,
+                                        const VehicleLimits& limits, const Eigen::Vector3d& start_velocity,
                                         const Eigen::Vector3d& start_acceleration) const {
   if (!(duration >= 0.0 && std::isfinite(duration))) {
     throw std::invalid_argument("QuadrotorSim::Run: duration must be >= 0 and finite");

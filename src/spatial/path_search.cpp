@@ -10,7 +10,7 @@
 #include <sstream>
 #include <utility>
 
-#include "option_check.h"
+#include "timeopt/core/option_check.h"
 
 namespace timeopt {
 namespace {

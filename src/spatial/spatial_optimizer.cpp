@@ -7,7 +7,7 @@
 
 #include <ceres/ceres.h>
 
-#include "option_check.h"
+#include "timeopt/core/option_check.h"
 #include "spatial_costs.h"
 
 namespace timeopt {

@@ -20,6 +20,7 @@
 #include <IpTNLP.hpp>
 
 #include "ipopt_nlp.h"
+#include "timeopt/core/option_check.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -323,21 +324,6 @@ class IpoptTemporalSolver final : public TemporalSolver {
 
   TemporalBackend backend() const override { return TemporalBackend::kIpopt; }
 
-  TemporalResult Solve(const TemporalProblem& problem) override {
-    TemporalResult result;
-    result.solver = "ipopt";
-    try {
-      SolveInto(problem, &result);
-    } catch (const std::exception& e) {
-      result.status = TemporalStatus::kNumericalError;
-      result.message = std::string("ipopt backend: unexpected error: ") + e.what();
-    } catch (...) {
-      result.status = TemporalStatus::kNumericalError;
-      result.message = "ipopt backend: unexpected error";
-    }
-    return result;
-  }
-
  private:
   // Creates the application once; options never change for this solver.
   bool EnsureApplication(std::string* error) {
@@ -386,51 +372,18 @@ class IpoptTemporalSolver final : public TemporalSolver {
     return true;
   }
 
-  void SolveInto(const TemporalProblem& problem, TemporalResult* result) {
-    if (!std::isfinite(options_.tolerance) || !(options_.tolerance > 0.0)) {
-      result->status = TemporalStatus::kInvalidInput;
-      result->message = "IpoptTemporalOptions.tolerance: expected a positive finite number";
-      return;
-    }
-    if (options_.max_iterations < 0) {
-      result->status = TemporalStatus::kInvalidInput;
-      result->message = "IpoptTemporalOptions.max_iterations: expected a number >= 0, got " +
-                        std::to_string(options_.max_iterations);
-      return;
-    }
+  // The backend's part of TemporalSolver::Solve (overrides are private: the skeleton calls it).
+  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
+                        std::vector<double>* x) override {
     const Clock::time_point build_start = Clock::now();
-    TemporalDiscretization d;
-    try {
-      d = Discretize(problem);
-    } catch (const std::invalid_argument& e) {
-      result->status = TemporalStatus::kInvalidInput;
-      result->message = e.what();
-      result->build_time_seconds = Seconds(build_start, Clock::now());
-      return;
-    }
-    result->joints = d.joints;
-    if (d.infeasible_reason) {
-      result->status = TemporalStatus::kInfeasible;
-      result->message = *d.infeasible_reason;
-      result->build_time_seconds = Seconds(build_start, Clock::now());
-      return;
-    }
-    if (d.num_vars == 0) {
-      // Every grid value is fixed and presolve checked every row: nothing to optimize.
-      result->build_time_seconds = Seconds(build_start, Clock::now());
-      result->status = TemporalStatus::kOptimal;
-      FinishOptimalResult(problem, d, std::vector<double>(), result);
-      return;
-    }
     Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
     std::string error;
     if (!EnsureApplication(&error)) {
       result->status = TemporalStatus::kNumericalError;
       result->message = error;
-      result->build_time_seconds = Seconds(build_start, Clock::now());
       return;
     }
-    result->build_time_seconds = Seconds(build_start, Clock::now());
+    result->build_time_seconds += Seconds(build_start, Clock::now());
 
     const Clock::time_point solve_start = Clock::now();
     const Ipopt::ApplicationReturnStatus status =
@@ -439,22 +392,15 @@ class IpoptTemporalSolver final : public TemporalSolver {
     Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app_->Statistics();
     if (Ipopt::IsValid(stats)) result->iterations = stats->IterationCount();
 
-    const std::vector<double>& x = nlp->solution();
     switch (status) {
       case Ipopt::Solve_Succeeded:
       case Ipopt::Solved_To_Acceptable_Level:
-        if (static_cast<int>(x.size()) != d.num_vars) {
-          result->status = TemporalStatus::kNumericalError;
-          result->message = std::string("Ipopt returned ") + ToString(status) +
-                            " without a solution";
-          return;
-        }
+        *x = nlp->solution();
         result->status = TemporalStatus::kOptimal;
         if (status == Ipopt::Solved_To_Acceptable_Level) {
           result->message = "Ipopt: solved to the acceptable level";
           result->reduced_accuracy = true;
         }
-        FinishOptimalResult(problem, d, x, result);
         return;
       case Ipopt::Infeasible_Problem_Detected:
         // The rows and bounds are linear, so a point of local infeasibility is a global one.
@@ -480,7 +426,19 @@ class IpoptTemporalSolver final : public TemporalSolver {
 
 }  // namespace
 
+bool IpoptTemporalOptions::IsValid(std::string* error) const {
+  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
+    return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
+  }
+  if (max_iterations < 0) {
+    return internal::FailOption(error, "max_iterations", "an integer >= 0", max_iterations);
+  }
+  return true;
+}
+
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument("IpoptTemporalOptions." + error);
   return std::make_unique<IpoptTemporalSolver>(options);
 }
 

@@ -20,6 +20,7 @@
 
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
+#include "timeopt/core/option_check.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -156,66 +157,38 @@ class SocpTemporalSolver final : public TemporalSolver {
 
   TemporalBackend backend() const override { return TemporalBackend::kSocp; }
 
-  TemporalResult Solve(const TemporalProblem& problem) override {
-    TemporalResult result;
-    result.solver = "socp";
+ protected:
+  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
+                        std::vector<double>* x) override {
     const auto start = Clock::now();
-    TemporalDiscretization d;
-    try {
-      d = Discretize(problem);
-    } catch (const std::invalid_argument& e) {
-      result.status = TemporalStatus::kInvalidInput;
-      result.message = e.what();
-      return result;
-    }
-    result.joints = d.joints;
-    if (d.infeasible_reason) {
-      result.status = TemporalStatus::kInfeasible;
-      result.message = *d.infeasible_reason;
-      result.build_time_seconds = Seconds(start, Clock::now());
-      return result;
-    }
-    if (d.num_vars == 0) {
-      // Every grid value is fixed: nothing to optimize, only to check.
-      std::vector<double> x;
-      if (d.MaxViolation(x) > 0.0) {
-        result.status = TemporalStatus::kInfeasible;
-        result.message = "the fixed speeds violate a limit";
-        return result;
-      }
-      FinishOptimalResult(problem, d, x, &result);
-      return result;
-    }
     const conic::Problem socp = BuildTemporalSocp(d);
-    result.build_time_seconds = Seconds(start, Clock::now());
+    result->build_time_seconds += Seconds(start, Clock::now());
 
     const conic::Result r = solver_.Solve(socp);
-    result.iterations = r.iterations;
-    result.solve_time_seconds = r.solve_time_seconds;
+    result->iterations = r.iterations;
+    result->solve_time_seconds = r.solve_time_seconds;
     switch (r.status) {
-      case conic::Status::kOptimal: {
-        std::vector<double> x(r.x.data(), r.x.data() + d.num_vars);
-        FinishOptimalResult(problem, d, x, &result);
-        result.message = r.message;
-        result.reduced_accuracy = r.reduced_accuracy;
+      case conic::Status::kOptimal:
+        x->assign(r.x.data(), r.x.data() + d.num_vars);
+        result->status = TemporalStatus::kOptimal;
+        result->message = r.message;
+        result->reduced_accuracy = r.reduced_accuracy;
         break;
-      }
       case conic::Status::kPrimalInfeasible:
-        result.status = TemporalStatus::kInfeasible;
-        result.message = "no time allocation satisfies the limits (conic solver: " + r.message + ")";
+        result->status = TemporalStatus::kInfeasible;
+        result->message = "no time allocation satisfies the limits (conic solver: " + r.message + ")";
         break;
       case conic::Status::kIterationLimit:
-        result.status = TemporalStatus::kIterationLimit;
-        result.message = r.message;
+        result->status = TemporalStatus::kIterationLimit;
+        result->message = r.message;
         break;
       case conic::Status::kDualInfeasible:
       case conic::Status::kNumericalError:
       case conic::Status::kNotSolved:
-        result.status = TemporalStatus::kNumericalError;
-        result.message = std::string("conic solver: ") + conic::ToString(r.status) + ": " + r.message;
+        result->status = TemporalStatus::kNumericalError;
+        result->message = std::string("conic solver: ") + conic::ToString(r.status) + ": " + r.message;
         break;
     }
-    return result;
   }
 
  private:
@@ -225,7 +198,19 @@ class SocpTemporalSolver final : public TemporalSolver {
 
 }  // namespace
 
+bool SocpTemporalOptions::IsValid(std::string* error) const {
+  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
+    return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
+  }
+  if (max_iterations < 1) {
+    return internal::FailOption(error, "max_iterations", "an integer >= 1", max_iterations);
+  }
+  return true;
+}
+
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument("SocpTemporalOptions." + error);
   return std::make_unique<SocpTemporalSolver>(options);
 }
 

@@ -1,8 +1,10 @@
 #include "timeopt/temporal/temporal_solver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace timeopt {
 
@@ -68,6 +70,65 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   }
   *max_velocity_ratio = vr;
   *max_acceleration_ratio = ar;
+}
+
+TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point from) {
+    return std::chrono::duration<double>(Clock::now() - from).count();
+  };
+  TemporalResult result;
+  result.solver = ToString(backend());
+  const Clock::time_point start = Clock::now();
+  TemporalDiscretization d;
+  try {
+    d = Discretize(problem);  // validates the problem first
+  } catch (const std::invalid_argument& e) {
+    result.status = TemporalStatus::kInvalidInput;
+    result.message = e.what();
+    result.build_time_seconds = seconds_since(start);
+    return result;
+  }
+  result.joints = d.joints;
+  result.build_time_seconds = seconds_since(start);
+  if (d.infeasible_reason) {
+    result.status = TemporalStatus::kInfeasible;
+    result.message = *d.infeasible_reason;
+    return result;
+  }
+  std::vector<double> x;
+  if (d.num_vars == 0) {
+    // Every grid value is fixed: nothing to optimize, only to check.
+    if (d.MaxViolation(x) > 0.0) {
+      result.status = TemporalStatus::kInfeasible;
+      result.message = "the fixed speeds violate a limit";
+      return result;
+    }
+    FinishOptimalResult(problem, d, x, &result);
+    return result;
+  }
+  const std::string name = result.solver;
+  try {
+    SolveDiscretized(d, &result, &x);
+  } catch (const std::invalid_argument& e) {
+    result.status = TemporalStatus::kInvalidInput;
+    result.message = e.what();
+    return result;
+  } catch (const std::exception& e) {
+    result.status = TemporalStatus::kNumericalError;
+    result.message = name + " backend: unexpected error: " + e.what();
+    return result;
+  }
+  if (result.status != TemporalStatus::kOptimal) return result;
+  if (static_cast<int>(x.size()) != d.num_vars) {
+    result.status = TemporalStatus::kNumericalError;
+    result.message = name + " backend: optimal without a solution of the right size";
+    return result;
+  }
+  const std::string message = result.message;
+  FinishOptimalResult(problem, d, x, &result);
+  result.message = message;
+  return result;
 }
 
 void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,

@@ -18,7 +18,7 @@
 #include "../common/run_cli.h"
 
 #include "timeopt/io/curve_io.h"
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 
 namespace timeopt {
 namespace {

@@ -1,4 +1,4 @@
-#include "timeopt/conic/skyline_ldl.h"
+#include "conic/skyline_ldl.h"
 
 #include <algorithm>
 #include <cmath>

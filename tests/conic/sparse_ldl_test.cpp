@@ -1,4 +1,4 @@
-#include "timeopt/conic/sparse_ldl.h"
+#include "conic/sparse_ldl.h"
 
 #include <algorithm>
 #include <cmath>

@@ -21,3 +21,4 @@ run_step(${CMAKE_COMMAND} -S "${CONSUMER_SOURCE_DIR}" -B "${build}"
          -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=${BUILD_TYPE})
 run_step(${CMAKE_COMMAND} --build "${build}" --config ${BUILD_TYPE})
 run_step("${build}/consumer")
+run_step("${build}/conic_only")

@@ -9,7 +9,7 @@
 #include <random>
 #include <string>
 
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/map_generators.h"
 

@@ -216,7 +216,8 @@ TEST(QuadrotorSim, FlyStartsFromTheProblemsBoundaryState) {
   ASSERT_NEAR(trajectory.Evaluate(0.0).acceleration.x(), 1.0, 1e-6);
   QuadrotorSimOptions o = Options();
   o.record_states = true;
-  const FeasibilityReport flown = QuadrotorSim(o).Fly(trajectory, problem);
+  const FeasibilityReport flown = QuadrotorSim(o).Fly(
+      trajectory, problem.limits, problem.boundary.start_velocity, problem.boundary.start_acceleration);
   EXPECT_EQ(flown.states.front().acceleration, Eigen::Vector3d::Zero());
   // The jump from rest to amax at t = 0 overshoots like the others (and by the same closed form).
   EXPECT_NEAR(flown.max_acceleration_ratio, 1.0 + JumpAccelerationOvershoot(), kZohTolerance * 1.0);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -12,7 +13,7 @@
 #include "timeopt/map/map_generators.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/spatial/path_search.h"
-#include "timeopt/spatial/planner.h"
+#include "timeopt/planner/planner.h"
 #include "timeopt/spatial/spatial_optimizer.h"
 
 namespace timeopt {
@@ -238,6 +239,24 @@ TEST(PathSearch, StatusesNameTheProblem) {
   const PlanResult bad = Plan(esdf, start, free_goal, plan_options);
   EXPECT_EQ(bad.status, PlanStatus::kInvalidInput);
   EXPECT_NE(bad.message.find("max_velocity"), std::string::npos) << bad.message;
+
+  // Nested options are validated before any stage runs: a status naming the field, never an
+  // exception (Planner::Plan used to throw from the temporal solver's factory here).
+  Planner planner(esdf);
+  PlannerOptions nested;
+  nested.socp.tolerance = -1.0;
+  PlanResult r2;
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, nested));
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("options.socp.tolerance"), std::string::npos) << r2.message;
+  nested = PlannerOptions();
+  nested.limits.max_acceleration_change = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, nested));
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("max_acceleration_change"), std::string::npos) << r2.message;
+  // The same planner then plans with valid options (its solver is remade for them).
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, PlannerOptions()));
+  EXPECT_TRUE(r2.is_success()) << r2.message;
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -337,11 +338,15 @@ TEST(IpoptBackend, InvalidInputIsReportedWithTheField) {
     EXPECT_THAT(r.message, HasSubstr("max_velocity"));
   }
   {
+    // Invalid options are refused when the solver is made, naming the field, for both backends.
     IpoptTemporalOptions options;
     options.tolerance = -1.0;
-    const TemporalResult r = MakeIpoptTemporalSolver(options)->Solve(LineProblem(10.0, 10));
-    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput);
-    EXPECT_THAT(r.message, HasSubstr("tolerance"));
+    EXPECT_THAT([&] { MakeIpoptTemporalSolver(options); },
+                ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("IpoptTemporalOptions.tolerance")));
+    SocpTemporalOptions socp;
+    socp.max_iterations = 0;
+    EXPECT_THAT([&] { MakeSocpTemporalSolver(socp); },
+                ::testing::ThrowsMessage<std::invalid_argument>(HasSubstr("SocpTemporalOptions.max_iterations")));
   }
 }
 

@@ -22,7 +22,8 @@
 
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/curve/piecewise_curve.h"
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
+#include "timeopt/core/files.h"
 
 namespace timeopt {
 
@@ -42,10 +43,5 @@ void WriteCurveJson(const PiecewiseCurve& curve, const std::string& path);
 
 Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& source = "waypoints");
 Waypoints ReadWaypointsCsv(const std::string& path);
-
-// Whole file as a string; throws FileError naming the path when it cannot be read.
-std::string ReadTextFile(const std::string& path);
-// Throws FileError naming the path when it cannot be written.
-void WriteTextFile(const std::string& path, const std::string& text);
 
 }  // namespace timeopt

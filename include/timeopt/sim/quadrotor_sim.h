@@ -18,7 +18,7 @@
 // acceleration jumps between cells and at the ends of cruise phases. A vehicle with finite jerk
 // cannot follow a jump; with these gains its acceleration overshoots a jump of size D by 0.206 D and
 // its velocity by 0.23 D / bandwidth. The acceleration-change bound lambda_a of the temporal problem
-// (TemporalLimits::max_acceleration_change) limits the jumps and therefore the overshoot.
+// (VehicleLimits::max_acceleration_change) limits the jumps and therefore the overshoot.
 
 #include <functional>
 #include <optional>
@@ -27,7 +27,7 @@
 
 #include <Eigen/Core>
 
-#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/core/vehicle_limits.h"
 #include "timeopt/trajectory/trajectory.h"
 
 namespace timeopt {
@@ -116,21 +116,24 @@ class QuadrotorSim {
   /// reference ends, it continues at its final velocity with zero acceleration (a hover for
   /// rest-to-rest trajectories). Throws std::invalid_argument if the limits are not positive and
   /// finite, the flight would take more than 1e8 steps, or the reference returns a non-finite state.
-  FeasibilityReport Run(const Trajectory& reference, const TemporalLimits& limits) const;
+  FeasibilityReport Run(const Trajectory& reference, const VehicleLimits& limits) const;
 
   /// The same for a reference given as a function on [0, duration] (duration >= 0).
-  FeasibilityReport Run(const Reference& reference, double duration, const TemporalLimits& limits) const;
+  FeasibilityReport Run(const Reference& reference, double duration, const VehicleLimits& limits) const;
 
-  /// Flies `reference` as the solution of `problem`: its limits, and the vehicle starting in the
-  /// problem's start state (boundary start velocity and acceleration, plus the options' initial
-  /// errors). The profile meets the start velocity, but its acceleration at t = 0 is the first
-  /// cell's unless max_acceleration_change bounds it, so a vehicle at rest starts with a jump.
-  FeasibilityReport Fly(const Trajectory& reference, const TemporalProblem& problem) const;
+  /// Flies `reference` as the solution of a temporal problem: against its limits, the vehicle
+  /// starting in the problem's start state (its boundary's start velocity and acceleration, plus
+  /// the options' initial errors). The profile meets the start velocity, but its acceleration at
+  /// t = 0 is the first cell's unless max_acceleration_change bounds it, so a vehicle at rest
+  /// starts with a jump.
+  FeasibilityReport Fly(const Trajectory& reference, const VehicleLimits& limits,
+                        const Eigen::Vector3d& start_velocity,
+                        const Eigen::Vector3d& start_acceleration) const;
 
   const Options& options() const { return options_; }
 
  private:
-  FeasibilityReport RunFrom(const Reference& reference, double duration, const TemporalLimits& limits,
+  FeasibilityReport RunFrom(const Reference& reference, double duration, const VehicleLimits& limits,
                             const Eigen::Vector3d& start_velocity,
                             const Eigen::Vector3d& start_acceleration) const;
 

@@ -15,20 +15,13 @@
 
 #include <Eigen/Core>
 
+#include "timeopt/core/vehicle_limits.h"
 #include "timeopt/curve/piecewise_curve.h"
 
 namespace timeopt {
 
-struct TemporalLimits {
-  // Per-axis velocity limit |v_axis| <= max_velocity(axis), m/s; each > 0 and finite.
-  Eigen::Vector3d max_velocity = Eigen::Vector3d::Constant(2.0);
-  // Per-axis acceleration limit |acc_axis| <= max_acceleration(axis), m/s^2; each > 0 and finite.
-  Eigen::Vector3d max_acceleration = Eigen::Vector3d::Constant(1.0);
-  // Optional bound lambda_a on the change of each axis' acceleration between consecutive cells
-  // (paper eqs. 44-45) and against the boundary accelerations (eqs. 48-49), m/s^2 per cell.
-  // Absent: none of these rows exist.
-  std::optional<double> max_acceleration_change;
-};
+// The temporal stage's limits are the vehicle's (timeopt/core/vehicle_limits.h).
+using TemporalLimits = VehicleLimits;
 
 // Velocity and acceleration at both ends. A velocity must be parallel to the curve's tangent
 // there (eqs. 46-47). Accelerations only enter through max_acceleration_change.

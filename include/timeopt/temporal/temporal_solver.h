@@ -11,7 +11,7 @@
 #include "timeopt/conic/problem.h"
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
-#include "timeopt/temporal/temporal_profile.h"
+#include "timeopt/trajectory/temporal_profile.h"
 
 namespace timeopt {
 
@@ -54,12 +54,25 @@ struct TemporalResult {
   bool is_success() const { return status == TemporalStatus::kOptimal; }
 };
 
+// The one skeleton of both backends. Solve() (not virtual) validates and discretizes the problem,
+// answers what presolve already decides (infeasible, or every grid value fixed), times the stages,
+// hands the rest to the backend's SolveDiscretized and finishes an optimal answer the same way for
+// both. So both backends answer every bad input alike: the same status and message.
 class TemporalSolver {
  public:
   virtual ~TemporalSolver() = default;
-  // Never throws for bad problems: they come back as kInvalidInput with a message.
-  virtual TemporalResult Solve(const TemporalProblem& problem) = 0;
+  // Never throws for bad problems: they come back as kInvalidInput with a message naming the
+  // field. An unexpected error inside a backend comes back as kNumericalError.
+  TemporalResult Solve(const TemporalProblem& problem);
   virtual TemporalBackend backend() const = 0;
+
+ protected:
+  // Solves `d`, which has free values (d.num_vars > 0) and no presolve verdict. Sets status,
+  // message, iterations, solve_time_seconds and reduced_accuracy, adds the backend's own assembly
+  // time to build_time_seconds, and on kOptimal sets *x to the d.num_vars free values. May throw
+  // std::invalid_argument for a problem the backend cannot represent (reported as kInvalidInput).
+  virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
+                                std::vector<double>* x) = 0;
 };
 
 // Options of the SOCP backend.
@@ -70,6 +83,10 @@ struct SocpTemporalOptions {
   double tolerance = 1e-8;
   // Interior-point iteration limit. 100 (the temporal problem needs 15-30).
   int max_iterations = 100;
+
+  // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
+  // and finite and max_iterations >= 1.
+  bool IsValid(std::string* error) const;
 };
 
 // Options of the Ipopt backend.
@@ -78,8 +95,13 @@ struct IpoptTemporalOptions {
   double tolerance = 1e-10;
   // Ipopt's `max_iter`. 3000.
   int max_iterations = 3000;
+
+  // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
+  // and finite and max_iterations >= 0.
+  bool IsValid(std::string* error) const;
 };
 
+// The factories throw std::invalid_argument with IsValid's message for invalid options.
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);

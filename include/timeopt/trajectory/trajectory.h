@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 
 #include "timeopt/curve/piecewise_curve.h"
-#include "timeopt/temporal/temporal_profile.h"
+#include "timeopt/trajectory/temporal_profile.h"
 
 namespace timeopt {
 

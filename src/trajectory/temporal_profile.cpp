@@ -1,4 +1,4 @@
-#include "timeopt/temporal/temporal_profile.h"
+#include "timeopt/trajectory/temporal_profile.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "timeopt/map/esdf_slice.h"
+#include "timeopt/viz/esdf_slice.h"
 
 #include <cairo.h>
 

@@ -1,4 +1,4 @@
-#include "timeopt/io/plot.h"
+#include "timeopt/viz/plot.h"
 
 #include <cairo.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 
 namespace timeopt {
 namespace {

@@ -12,6 +12,7 @@
 // The planner reads the map only through the ESDF (grid for the search, DistanceField for the
 // optimizer). Metres and seconds.
 
+#include <memory>
 #include <string>
 
 #include <Eigen/Core>
@@ -118,7 +119,8 @@ struct PlanResult {
   bool is_success() const { return status == PlanStatus::kSuccess; }
 };
 
-// Holds the front-end's work arrays, so that repeated plans on one map do not allocate them again.
+// Holds the front-end's work arrays and the temporal solver's workspace, so that repeated plans on
+// one map do not allocate them again.
 // Not thread-safe.
 class Planner {
  public:
@@ -130,6 +132,8 @@ class Planner {
  private:
   const Esdf* esdf_;
   PathSearch search_;
+  std::unique_ptr<TemporalSolver> temporal_;  // made at the first Plan, remade when options.socp change
+  SocpTemporalOptions temporal_options_;
 };
 
 // One plan (a Planner for one call).

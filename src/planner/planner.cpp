@@ -1,4 +1,4 @@
-#include "timeopt/spatial/planner.h"
+#include "timeopt/planner/planner.h"
 
 #include <algorithm>
 #include <chrono>
@@ -7,7 +7,7 @@
 #include <sstream>
 #include <vector>
 
-#include "option_check.h"
+#include "timeopt/core/option_check.h"
 
 namespace timeopt {
 namespace {
@@ -89,7 +89,16 @@ bool PlannerOptions::IsValid(std::string* error) const {
                   "a positive number (m/s^2)", limits.max_acceleration(a));
     }
   }
+  if (limits.max_acceleration_change.has_value() &&
+      (!std::isfinite(*limits.max_acceleration_change) || *limits.max_acceleration_change <= 0.0)) {
+    return fail("limits.max_acceleration_change", "a positive number (m/s^2 per cell)",
+                *limits.max_acceleration_change);
+  }
   std::string sub;
+  if (!socp.IsValid(&sub)) {
+    if (error != nullptr) *error = "socp." + sub;
+    return false;
+  }
   if (!search.IsValid(&sub)) {
     if (error != nullptr) *error = "search." + sub;
     return false;
@@ -277,7 +286,14 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   problem.rho = options.rho;
   problem.constraint_mode = options.constraint_mode;
   t = Clock::now();
-  result.temporal = MakeSocpTemporalSolver(options.socp)->Solve(problem);
+  // One solver per planner, kept while its options stay the same, so that a re-plan reuses its
+  // workspace (the conic solver's symbolic analysis when the sparsity pattern repeats).
+  if (!temporal_ || temporal_options_.tolerance != options.socp.tolerance ||
+      temporal_options_.max_iterations != options.socp.max_iterations) {
+    temporal_ = MakeSocpTemporalSolver(options.socp);
+    temporal_options_ = options.socp;
+  }
+  result.temporal = temporal_->Solve(problem);
   result.times.temporal_ms = MillisecondsSince(t);
   switch (result.temporal.status) {
     case TemporalStatus::kOptimal:

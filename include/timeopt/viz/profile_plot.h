@@ -5,13 +5,13 @@
 
 #include <string>
 
-#include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/core/vehicle_limits.h"
 #include "timeopt/trajectory/trajectory.h"
 
 namespace timeopt {
 
 // Samples the trajectory at `samples` evenly spaced times (>= 2) and writes the plot.
-void WriteProfilePlotPng(const Trajectory& trajectory, const TemporalLimits& limits,
+void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits,
                          const std::string& path, int samples = 2000);
 
 }  // namespace timeopt

@@ -1,12 +1,12 @@
-#include "timeopt/io/profile_plot.h"
+#include "timeopt/viz/profile_plot.h"
 
 #include <stdexcept>
 
-#include "timeopt/io/plot.h"
+#include "timeopt/viz/plot.h"
 
 namespace timeopt {
 
-void WriteProfilePlotPng(const Trajectory& trajectory, const TemporalLimits& limits,
+void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits,
                          const std::string& path, int samples) {
   if (samples < 2) throw std::invalid_argument("WriteProfilePlotPng: samples must be >= 2");
   const double T = trajectory.duration();

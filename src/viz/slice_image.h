@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "timeopt/io/errors.h"
+#include "timeopt/core/errors.h"
 #include "timeopt/map/esdf.h"
 
 namespace timeopt::internal {

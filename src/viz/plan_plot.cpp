@@ -1,4 +1,4 @@
-#include "timeopt/spatial/plan_plot.h"
+#include "timeopt/viz/plan_plot.h"
 
 #include <cairo.h>
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "../map/slice_image.h"
+#include "slice_image.h"
 
 namespace timeopt {
 namespace {
