@@ -45,6 +45,16 @@ void TemporalProblem::Validate() const {
       throw std::invalid_argument("curve.pieces[" + std::to_string(i) +
                                   "]: the piece has zero length (constant polynomial)");
     }
+    // The rows multiply squared tangents by b and by the degree's factors; above 1e100 m their
+    // products could overflow a double, and both backends would fail in different ways. Such a
+    // curve is refused alike by both, naming the piece (1e100 m is beyond any unit of length).
+    constexpr double kMaxCoefficient = 1e100;
+    const double largest = c.cwiseAbs().maxCoeff();
+    if (!(largest <= kMaxCoefficient)) {
+      throw std::invalid_argument("curve.pieces[" + std::to_string(i) +
+                                  "]: a coefficient's magnitude is " + Num(largest) +
+                                  " m, above the supported 1e100 m");
+    }
   }
   for (int a = 0; a < 3; ++a) {
     CheckPositive(limits.max_velocity(a), "limits.max_velocity[" + std::to_string(a) + "]");

@@ -161,6 +161,22 @@ TEST_P(BothBackends, InfeasibleProblemsAreReportedAsInfeasible) {
   EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
 }
 
+// Both backends share one skeleton, so a curve whose numbers cannot be represented gets the same
+// answer from both: invalid input naming the piece (before, 1e308 was invalid input from the SOCP
+// backend but a numerical error from Ipopt, and 1e160 a false "infeasible" from the SOCP backend).
+TEST_P(BothBackends, HugeCoefficientsAreInvalidInputForBothBackends) {
+  for (const double huge : {1e308, 1e200, 1e160, 1e101}) {
+    TemporalProblem p = LineProblem(10.0, 10);
+    PolynomialPiece::Coefficients c = p.curve.piece(0).coefficients();
+    c.conservativeResize(Eigen::NoChange, 3);
+    c.col(2) << huge, 0.0, 0.0;
+    p.curve = PiecewiseCurve({PolynomialPiece(c)});
+    const TemporalResult r = Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput) << huge << ": " << r.message;
+    EXPECT_THAT(r.message, HasSubstr("curve.pieces[0]"));
+  }
+}
+
 TEST_P(BothBackends, InvalidInputNamesTheField) {
   TemporalProblem p = LineProblem(10.0, 0);
   TemporalResult r = Solve(p);
