@@ -47,6 +47,7 @@ fi
 
 if ! command -v debootstrap >/dev/null 2>&1; then
   echo "check_fresh_machine: installing debootstrap"
+  apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends debootstrap >/dev/null
 fi
 
@@ -64,10 +65,17 @@ root="$work/root"
 cleanup() {
   local mounted
   # Unmount everything below the root, deepest first.
-  mounted="$(awk -v r="$root" '$2 == r || index($2, r "/") == 1 { print $2 }' /proc/mounts | sort -r)"
+  local real
+  real="$(readlink -f "$root")"
+  mounted="$(awk -v r="$real" '$2 == r || index($2, r "/") == 1 { print $2 }' /proc/mounts | sort -r)"
   for m in $mounted; do umount -l "$m" 2>/dev/null || true; done
   if [[ $keep_root -eq 0 ]]; then
-    rm -rf "$work"
+    if awk -v r="$real" '$2 == r || index($2, r "/") == 1 { found = 1 } END { exit !found }' /proc/mounts; then
+      echo "check_fresh_machine: something is still mounted under $root; not deleting $work" >&2
+    else
+      # Never into another file system, whatever was left behind.
+      rm -rf --one-file-system "$work" || true
+    fi
   else
     echo "check_fresh_machine: root kept at $root (proc unmounted)"
   fi

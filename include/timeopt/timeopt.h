@@ -12,6 +12,8 @@
 #include "timeopt/curve/polynomial_piece.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/core/errors.h"
+#include "timeopt/core/files.h"
+#include "timeopt/core/vehicle_limits.h"
 #include "timeopt/viz/plot.h"
 #include "timeopt/viz/profile_plot.h"
 #include "timeopt/io/temporal_io.h"

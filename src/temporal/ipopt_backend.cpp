@@ -378,12 +378,13 @@ class IpoptTemporalSolver final : public TemporalSolver {
     const Clock::time_point build_start = Clock::now();
     Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
     std::string error;
-    if (!EnsureApplication(&error)) {
+    const bool ready = EnsureApplication(&error);
+    result->build_time_seconds += Seconds(build_start, Clock::now());
+    if (!ready) {
       result->status = TemporalStatus::kNumericalError;
       result->message = error;
       return;
     }
-    result->build_time_seconds += Seconds(build_start, Clock::now());
 
     const Clock::time_point solve_start = Clock::now();
     const Ipopt::ApplicationReturnStatus status =

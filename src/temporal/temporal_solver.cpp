@@ -96,38 +96,46 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
     result.message = *d.infeasible_reason;
     return result;
   }
-  std::vector<double> x;
-  if (d.num_vars == 0) {
-    // Every grid value is fixed: nothing to optimize, only to check.
-    if (d.MaxViolation(x) > 0.0) {
-      result.status = TemporalStatus::kInfeasible;
-      result.message = "the fixed speeds violate a limit";
+  const std::string name = result.solver;
+  bool finishing = false;  // an exception while finishing is the solution's fault, not the input's
+  try {
+    std::vector<double> x;
+    if (d.num_vars == 0) {
+      // Every grid value is fixed: nothing to optimize, only to check.
+      if (d.MaxViolation(x) > 0.0) {
+        result.status = TemporalStatus::kInfeasible;
+        result.message = "the fixed speeds violate a limit";
+        return result;
+      }
+      finishing = true;
+      FinishOptimalResult(problem, d, x, &result);
       return result;
     }
-    FinishOptimalResult(problem, d, x, &result);
-    return result;
-  }
-  const std::string name = result.solver;
-  try {
     SolveDiscretized(d, &result, &x);
+    if (result.status != TemporalStatus::kOptimal) return result;
+    if (static_cast<int>(x.size()) != d.num_vars) {
+      result.status = TemporalStatus::kNumericalError;
+      result.message = name + " backend: optimal without a solution of the right size";
+      return result;
+    }
+    const std::string message = result.message;
+    finishing = true;
+    FinishOptimalResult(problem, d, x, &result);
+    result.message = message;
   } catch (const std::invalid_argument& e) {
-    result.status = TemporalStatus::kInvalidInput;
-    result.message = e.what();
-    return result;
+    // From a backend: a problem it cannot represent. From finishing (validation already ran): a
+    // solution that makes no profile, e.g. a cell at zero speed at both ends.
+    result.status = finishing ? TemporalStatus::kNumericalError : TemporalStatus::kInvalidInput;
+    result.message = finishing ? name + " backend: the solution makes no profile: " + e.what()
+                               : std::string(e.what());
   } catch (const std::exception& e) {
     result.status = TemporalStatus::kNumericalError;
     result.message = name + " backend: unexpected error: " + e.what();
-    return result;
-  }
-  if (result.status != TemporalStatus::kOptimal) return result;
-  if (static_cast<int>(x.size()) != d.num_vars) {
+  } catch (...) {
+    // Ipopt's own exceptions do not derive from std::exception.
     result.status = TemporalStatus::kNumericalError;
-    result.message = name + " backend: optimal without a solution of the right size";
-    return result;
+    result.message = name + " backend: unexpected error";
   }
-  const std::string message = result.message;
-  FinishOptimalResult(problem, d, x, &result);
-  result.message = message;
   return result;
 }
 

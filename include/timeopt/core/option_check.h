@@ -1,7 +1,7 @@
 #pragma once
 
-// Shared by the IsValid() functions of the spatial options: records "<field>: expected <what>,
-// got <value>" in *error (when not null) and returns false.
+// Shared by the IsValid() functions of the option structs (spatial, planner, temporal): records
+// "<field>: expected <what>, got <value>" in *error (when not null) and returns false.
 
 #include <sstream>
 #include <string>
