@@ -20,7 +20,6 @@
 #include <IpTNLP.hpp>
 
 #include "ipopt_nlp.h"
-#include "timeopt/core/option_check.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -426,16 +425,6 @@ class IpoptTemporalSolver final : public TemporalSolver {
 };
 
 }  // namespace
-
-bool IpoptTemporalOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
-    return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
-  }
-  if (max_iterations < 0) {
-    return internal::FailOption(error, "max_iterations", "an integer >= 0", max_iterations);
-  }
-  return true;
-}
 
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options) {
   std::string error;

@@ -20,7 +20,6 @@
 
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
-#include "timeopt/core/option_check.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -197,16 +196,6 @@ class SocpTemporalSolver final : public TemporalSolver {
 };
 
 }  // namespace
-
-bool SocpTemporalOptions::IsValid(std::string* error) const {
-  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
-    return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
-  }
-  if (max_iterations < 1) {
-    return internal::FailOption(error, "max_iterations", "an integer >= 1", max_iterations);
-  }
-  return true;
-}
 
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options) {
   std::string error;

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "timeopt/core/option_check.h"
+
 namespace timeopt {
 
 const char* ToString(TemporalStatus status) {
@@ -25,6 +27,32 @@ const char* ToString(TemporalBackend backend) {
     case TemporalBackend::kIpopt: return "ipopt";
   }
   return "unknown";
+}
+
+namespace {
+
+// The checks both backends' options share: a positive finite tolerance and an iteration limit of
+// at least `min_iterations`.
+bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations,
+                        std::string* error) {
+  if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
+    return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
+  }
+  if (max_iterations < min_iterations) {
+    return internal::FailOption(error, "max_iterations",
+                                "an integer >= " + std::to_string(min_iterations), max_iterations);
+  }
+  return true;
+}
+
+}  // namespace
+
+bool SocpTemporalOptions::IsValid(std::string* error) const {
+  return ValidSolverOptions(tolerance, max_iterations, 1, error);
+}
+
+bool IpoptTemporalOptions::IsValid(std::string* error) const {
+  return ValidSolverOptions(tolerance, max_iterations, 0, error);
 }
 
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
