@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -569,6 +570,62 @@ TEST(BadInputTest, InvalidOptions) {
   options.refinement_mu_factor = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_THAT(error, HasSubstr("refinement_mu_factor"));
+}
+
+// The tuning heuristics that were literals inside the solve: every one is checked, and its message
+// names it.
+TEST(BadInputTest, InvalidHeuristicOptions) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::pair<std::string, std::function<void(Solver::Options&)>>> cases = {
+      {"reduced_max_expanded_cones", [](Solver::Options& o) { o.reduced_max_expanded_cones = -1; }},
+      {"reduced_max_profile_per_row", [](Solver::Options& o) { o.reduced_max_profile_per_row = 0; }},
+      {"slow_phase_stall_factor", [](Solver::Options& o) { o.slow_phase_stall_factor = 0; }},
+      {"max_regularization_boosts", [](Solver::Options& o) { o.max_regularization_boosts = -1; }},
+      {"regularization_boost_factor", [](Solver::Options& o) { o.regularization_boost_factor = 1.0; }},
+      {"regularization_boost_factor", [&](Solver::Options& o) { o.regularization_boost_factor = nan; }},
+      {"max_step_trials", [](Solver::Options& o) { o.max_step_trials = 0; }},
+      {"lookback_merit", [](Solver::Options& o) { o.lookback_merit = -1.0; }},
+      {"lookback_merit", [&](Solver::Options& o) { o.lookback_merit = nan; }},
+      {"lookback_min_step", [](Solver::Options& o) { o.lookback_min_step = 1.5; }},
+      {"divergence_merit_factor", [](Solver::Options& o) { o.divergence_merit_factor = 1.0; }},
+      {"divergence_merit_factor", [&](Solver::Options& o) { o.divergence_merit_factor = nan; }},
+  };
+  for (const auto& [name, mutate] : cases) {
+    SCOPED_TRACE(name);
+    Solver::Options options;
+    mutate(options);
+    std::string error;
+    EXPECT_FALSE(options.IsValid(&error));
+    EXPECT_THAT(error, HasSubstr(name));
+    EXPECT_THROW(Solver{options}, std::invalid_argument);
+  }
+  // The boundary values are valid: no boosts, lookback disabled.
+  Solver::Options options;
+  options.max_regularization_boosts = 0;
+  options.lookback_merit = 0.0;
+  options.lookback_min_step = 1.0;
+  options.reduced_max_expanded_cones = 0;
+  EXPECT_TRUE(options.IsValid(nullptr));
+}
+
+// The band limit of the automatic method decides it: the random path SOCP (a window of 30 columns per
+// row) is too wide for the default 16 entries per row and goes to the augmented method; with the limit
+// raised it goes to the reduced one, and the change forces a new analysis on the next Solve(). Both
+// reach the same optimum (1e-6 relative: two methods, each to the 1e-8 tolerances).
+TEST(KktMethodTest, BandLimitDecidesAutomaticMethod) {
+  const Problem problem = test_support::RandomPathSocp(200, 3);
+  Solver solver;
+  const Result augmented = solver.Solve(problem);
+  ASSERT_TRUE(augmented.is_success()) << augmented.BriefReport();
+  EXPECT_EQ(augmented.kkt_method, KktMethod::kAugmentedSparse);
+  Solver::Options options;
+  options.reduced_max_profile_per_row = 1000000;
+  solver.set_options(options);
+  const Result banded = solver.Solve(problem);
+  ASSERT_TRUE(banded.is_success()) << banded.BriefReport();
+  EXPECT_FALSE(banded.reused_symbolic);
+  EXPECT_EQ(banded.kkt_method, KktMethod::kReducedBanded);
+  EXPECT_NEAR(banded.primal_objective, augmented.primal_objective, 1e-6 * std::abs(augmented.primal_objective));
 }
 
 TEST(StatusTest, NamesAndReport) {

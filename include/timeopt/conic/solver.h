@@ -41,6 +41,7 @@
 // problems the last step to the 1e-8 tolerances can fail and the result is kOptimal with
 // reduced_accuracy (typically gap ~1e-7 relative).
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -77,14 +78,21 @@ enum class Status {
 };
 
 /// Short lowercase name of a status, e.g. "optimal", "primal_infeasible".
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<Status, 6> kStatuses = {Status::kOptimal,         Status::kPrimalInfeasible,
+                                                   Status::kDualInfeasible,  Status::kIterationLimit,
+                                                   Status::kNumericalError,  Status::kNotSolved};
 const char* ToString(Status status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, Status* status);
 
 /// How the Newton (KKT) system of every iteration is solved.
 enum class KktMethod {
   /// kReducedBanded when it is safe and pays off: G has at least as many rows as columns and no empty
-  /// column (else G' W^{-2} G is singular), at most 8 cones are expanded, and the reduced system is
-  /// narrow (its variable-band profile, after a reverse Cuthill-McKee ordering, stores at most 16
-  /// entries per row on average, border rows excluded). Otherwise kAugmentedSparse.
+  /// column (else G' W^{-2} G is singular), at most SolverOptions::reduced_max_expanded_cones (8)
+  /// cones are expanded, and the reduced system is narrow (its variable-band profile, after a reverse
+  /// Cuthill-McKee ordering, stores at most SolverOptions::reduced_max_profile_per_row (16) entries
+  /// per row on average, border rows excluded). Otherwise kAugmentedSparse.
   kAutomatic,
   /// The full quasi-definite system in (x, y, z), AMD-ordered, sparse LDL'. Works for every sparsity.
   kAugmentedSparse,
@@ -97,7 +105,11 @@ enum class KktMethod {
   kReducedBanded,
 };
 
+inline constexpr std::array<KktMethod, 3> kKktMethods = {
+    KktMethod::kAutomatic, KktMethod::kAugmentedSparse, KktMethod::kReducedBanded};
 const char* ToString(KktMethod method);
+// The enumerator named `text` (as ToString writes it) into *method; false when none is.
+bool FromString(const std::string& text, KktMethod* method);
 
 /// Progress of one interior-point iteration, given to Options::callback.
 struct IterationInfo {
@@ -138,8 +150,9 @@ struct Result {
   double solve_time_seconds = 0.0; ///< Wall time of Solve(), including analysis.
   int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
   int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
-  /// Times the static regularization was raised 100-fold after a factorization broke down (the
-  /// direction came out non-finite); at most 3 per solve.
+  /// Times the static regularization was raised (by SolverOptions::regularization_boost_factor) after
+  /// a factorization broke down (the direction came out non-finite); at most
+  /// SolverOptions::max_regularization_boosts per solve.
   int num_regularization_boosts = 0;
   bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
   /// True if kOptimal was reached only with the reduced tolerances of SolverOptions (the iteration
@@ -153,7 +166,7 @@ struct Result {
   long long factor_nonzeros = 0;
   /// The method used at the end (never kAutomatic after Solve()). The reduced method hands over to
   /// the augmented one, from the best iterate, if a direction near the optimum comes out spoiled by
-  /// the rounding of G'W^{-2}G (the merit jumps 1000-fold).
+  /// the rounding of G'W^{-2}G (the merit jumps by SolverOptions::divergence_merit_factor).
   KktMethod kkt_method = KktMethod::kAutomatic;
 
   /// True iff status == kOptimal.
@@ -183,9 +196,28 @@ struct SolverOptions {
   double reduced_gap_tolerance = 1e-5;
   /// Iterations without halving either the merit max(pres / tol, dres / tol, gap / gap tol) or the
   /// complementarity mu after which the iteration is declared stalled, when the best iterate already
-  /// meets the reduced tolerances; otherwise four times as many. 5: near the optimum a healthy
-  /// iteration halves both at every step.
+  /// meets the reduced tolerances; otherwise slow_phase_stall_factor times as many. 5: near the
+  /// optimum a healthy iteration halves both at every step.
   int stall_iterations = 5;
+  /// Factor (>= 1) on stall_iterations while the best iterate does not yet meet the reduced
+  /// tolerances: far from the optimum slow phases of a few iterations are normal (infeasible problems
+  /// until a certificate appears, long path problems in their first iterations). 4 (20 iterations).
+  int slow_phase_stall_factor = 4;
+  /// Lookback: a full step from the best iterate that neither ends the solve nor improves the merit
+  /// may have traded one criterion for another (the gap met, the primal residual spoiled by rounding
+  /// in the last solves); the midpoint of that step often meets all of them and is measured once (no
+  /// KKT solve; the callback sees the iteration number again). Only when the best merit (see
+  /// stall_iterations; 1 = the tolerances met) is at most lookback_merit (>= 0, dimensionless): 10,
+  /// i.e. within 10x of the tolerances, where rounding rather than the method limits the step...
+  double lookback_merit = 10.0;
+  /// ... and the step was longer than lookback_min_step (in [0, 1]): a shorter step moved the iterate
+  /// too little to have traded criteria, and its midpoint is nearly the best iterate again. 0.2.
+  double lookback_min_step = 0.2;
+  /// Once the best iterate meets the reduced tolerances, a merit above divergence_merit_factor (> 1)
+  /// times the best one is rounding taking over, not a phase that recovers: the solve stops with the
+  /// best iterate (the reduced method first hands over to the augmented one, see Result::kkt_method).
+  /// 1e3: the breakdowns seen rose ~1e4-fold at once.
+  double divergence_merit_factor = 1e3;
   /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
   int max_iterations = 100;
   /// Wall-time limit of one Solve(), seconds. Infinite by default.
@@ -195,10 +227,25 @@ struct SolverOptions {
   double step_fraction = 0.99;
   /// Smallest step length (in (0, 1)) below which the iteration is declared stuck. 1e-10.
   double min_step = 1e-10;
+  /// The exact step keeps the iterate inside the cones, but rounding can put a nearly active cone on
+  /// its boundary; the step is then halved until the trial point is strictly interior, trying at most
+  /// max_step_trials (>= 1) points (and none below min_step). 40: 2^-40 ~ 1e-12 is below the default
+  /// min_step anyway.
+  int max_step_trials = 40;
   /// Static regularization delta added with the sign of each KKT diagonal block (dimensionless).
   /// 1e-8 makes the KKT matrix quasi-definite even with redundant equalities; iterative refinement
   /// removes its effect on the solution.
   double static_regularization = 1e-8;
+  /// When a factorization breaks down (the direction comes out non-finite; near the optimum the
+  /// scaling spans ~20 orders of magnitude and the LDL' of a large system can meet pivots of the
+  /// wrong sign, then overflow), the static regularization is multiplied by
+  /// regularization_boost_factor (> 1) for the rest of the solve and the factorization redone, at
+  /// most max_regularization_boosts (>= 0) times per solve; refinement on the unregularized system
+  /// recovers the accuracy. 100 and 3: each attempt changes the pivots decisively, and a breakdown
+  /// that regularization does not cure costs at most three extra factorizations (the default delta
+  /// then ends at 1e-2).
+  double regularization_boost_factor = 100.0;
+  int max_regularization_boosts = 3;
   /// A pivot whose signed value falls below this threshold is replaced (dynamic regularization).
   double dynamic_regularization_threshold = 1e-13;
   /// The value (with the pivot's expected sign) that replaces such a pivot. 1e-7.
@@ -223,6 +270,15 @@ struct SolverOptions {
   /// (two extra KKT rows per cone) instead of a dense block. >= 1. 6: below that a dense block
   /// has fewer non-zeros than the expansion.
   int sparse_cone_min_dimension = 6;
+  /// kAutomatic chooses kReducedBanded only with at most this many expanded cones (>= 0): each adds
+  /// two full-width border rows to the banded factor, beyond a few of them the augmented system is
+  /// the better choice. 8.
+  int reduced_max_expanded_cones = 8;
+  /// kAutomatic chooses kReducedBanded only if the reduced system's profile, after the reverse
+  /// Cuthill-McKee ordering, stores at most this many entries per row on average (>= 1; border rows
+  /// excluded). 16: a skyline factor stores (and computes on) every zero inside the profile, so on
+  /// wider problems the AMD-ordered sparse factor with its little fill is cheaper.
+  int reduced_max_profile_per_row = 16;
   /// How the KKT system is solved; see KktMethod. kAutomatic.
   KktMethod kkt_method = KktMethod::kAutomatic;
   /// Called after every iteration (and once for the initial point) if set. The library never prints.
@@ -245,7 +301,8 @@ class Solver {
 
   const Options& options() const { return options_; }
   /// Replaces the options (throws std::invalid_argument if !options.IsValid()). A change of
-  /// sparse_cone_min_dimension or kkt_method forces a new symbolic analysis at the next Solve().
+  /// sparse_cone_min_dimension, kkt_method, reduced_max_expanded_cones or reduced_max_profile_per_row
+  /// forces a new symbolic analysis at the next Solve().
   void set_options(const Options& options);
 
   /// Solves the problem. Throws std::invalid_argument (before any iteration) if the problem is malformed
