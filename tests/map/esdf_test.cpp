@@ -9,20 +9,12 @@
 
 #include "timeopt/map/voxel_grid.h"
 
+#include "../common/map_fixtures.h"
+
 namespace timeopt {
 namespace {
 
-OccupancyGrid RandomGrid(const Eigen::Vector3i& min, const Eigen::Vector3i& size, double resolution,
-                         double fill, uint64_t seed) {
-  VoxelBox box;
-  box.min = min;
-  box.size = size;
-  OccupancyGrid grid(resolution, box);
-  std::mt19937_64 rng(seed);
-  std::bernoulli_distribution occupied(fill);
-  for (auto& v : grid.occupied) v = occupied(rng) ? 1 : 0;
-  return grid;
-}
+using test_support::RandomGrid;
 
 // Independent truth: the definition in esdf.h evaluated by trying every pair of voxels.
 double BruteForce(const OccupancyGrid& grid, const Eigen::Vector3i& index) {

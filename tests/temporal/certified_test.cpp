@@ -10,25 +10,22 @@
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
-namespace timeopt {
-inline void PrintTo(TemporalBackend backend, std::ostream* os) { *os << ToString(backend); }
+#include "../common/fixtures.h"
 
+namespace timeopt {
 namespace {
 
+using test_support::RandomWalk;
+using test_support::Segment;
+using test_support::WalkProblem;
+
+// A random walk from the origin.
 Waypoints Walk(std::mt19937& rng, int count) {
-  std::uniform_real_distribution<double> u(-4.0, 4.0);
-  Waypoints w(3, count);
-  w.col(0).setZero();
-  for (int i = 1; i < count; ++i) w.col(i) = w.col(i - 1) + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng));
-  return w;
+  return RandomWalk(rng, count, Eigen::Vector3d::Zero());
 }
 
 TemporalProblem Problem(const PiecewiseCurve& curve, int K, ConstraintMode mode) {
-  TemporalProblem p;
-  p.curve = curve;
-  p.limits.max_velocity = Eigen::Vector3d(3.0, 3.0, 2.0);
-  p.limits.max_acceleration = Eigen::Vector3d(2.0, 2.0, 1.5);
-  p.cells_per_piece = K;
+  TemporalProblem p = WalkProblem(curve, K);
   p.constraint_mode = mode;
   return p;
 }
@@ -82,9 +79,8 @@ TEST_P(Certified, CostsLittleAndTheGapShrinksWithK) {
 // On a straight line f'' = 0 and f' is constant, so certified rows coincide with the paper's and
 // the closed form T = L/v + v/a = 7 is reproduced (switch points on the grid for K multiple of 5).
 TEST_P(Certified, StraightLineMatchesClosedForm) {
-  PolynomialPiece::Coefficients c(3, 2);
-  c << 0, 10, 0, 0, 0, 0;
-  TemporalProblem p = Problem(PiecewiseCurve({PolynomialPiece(c)}), 20, ConstraintMode::kCertified);
+  TemporalProblem p = Problem(Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 0, 0)), 20,
+                              ConstraintMode::kCertified);
   p.limits.max_velocity.setConstant(2.0);
   p.limits.max_acceleration.setConstant(1.0);
   const TemporalResult r = Solve(p);

@@ -19,10 +19,14 @@
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
+#include "../common/fixtures.h"
+
 namespace timeopt {
 namespace {
 
 using ::testing::HasSubstr;
+using test_support::LineProblem;
+using test_support::LinearPiece;
 
 // Cubic Hermite piece from p0 to p1 with tangents t0, t1 (in s).
 PolynomialPiece Hermite(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
@@ -32,13 +36,6 @@ PolynomialPiece Hermite(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
   c.col(1) = t0;
   c.col(2) = 3.0 * (p1 - p0) - 2.0 * t0 - t1;
   c.col(3) = 2.0 * (p0 - p1) + t0 + t1;
-  return PolynomialPiece(c);
-}
-
-PolynomialPiece Linear(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
-  PolynomialPiece::Coefficients c(3, 2);
-  c.col(0) = from;
-  c.col(1) = to - from;
   return PolynomialPiece(c);
 }
 
@@ -58,16 +55,6 @@ TemporalProblem RandomG1Problem(std::mt19937& rng, int K, double rho) {
   p.boundary.start_velocity = 0.1 * t0;
   p.cells_per_piece = K;
   p.rho = rho;
-  return p;
-}
-
-// A straight line of the given length along x, one linear piece, rest to rest.
-TemporalProblem LineProblem(double length, int K) {
-  TemporalProblem p;
-  p.curve = PiecewiseCurve({Linear(Eigen::Vector3d::Zero(), Eigen::Vector3d(length, 0, 0))});
-  p.limits.max_velocity = Eigen::Vector3d::Constant(2.0);
-  p.limits.max_acceleration = Eigen::Vector3d::Constant(1.0);
-  p.cells_per_piece = K;
   return p;
 }
 
@@ -258,8 +245,8 @@ TEST(IpoptBackend, SplitLineWithUnequalPiecesMatchesClosedForm) {
   auto solver = MakeIpoptTemporalSolver();
   for (int K : {30, 60}) {
     TemporalProblem p = LineProblem(10.0, K);
-    p.curve = PiecewiseCurve({Linear(Eigen::Vector3d::Zero(), Eigen::Vector3d(4, 0, 0)),
-                              Linear(Eigen::Vector3d(4, 0, 0), Eigen::Vector3d(10, 0, 0))});
+    p.curve = PiecewiseCurve({LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(4, 0, 0)),
+                              LinearPiece(Eigen::Vector3d(4, 0, 0), Eigen::Vector3d(10, 0, 0))});
     const TemporalResult r = solver->Solve(p);
     ASSERT_EQ(r.status, TemporalStatus::kOptimal) << r.message;
     ASSERT_EQ(r.joints.size(), 1u);

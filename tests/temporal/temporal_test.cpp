@@ -18,36 +18,17 @@
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 
+#include "../common/fixtures.h"
+
 namespace timeopt {
-
-// Readable parameter names in test output.
-inline void PrintTo(TemporalBackend backend, std::ostream* os) { *os << ToString(backend); }
-
 namespace {
 
 using ::testing::HasSubstr;
-
-// A straight segment from `from` to `to` as one linear piece.
-PiecewiseCurve Segment(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
-  PolynomialPiece::Coefficients c(3, 2);
-  c.col(0) = from;
-  c.col(1) = to - from;
-  return PiecewiseCurve({PolynomialPiece(c)});
-}
-
-// Rest-to-rest minimum time along a line with speed limit v and acceleration limit a.
-double RestToRestTime(double length, double v, double a) {
-  return length >= v * v / a ? length / v + v / a : 2.0 * std::sqrt(length / a);
-}
-
-TemporalProblem LineProblem(double length, int K) {
-  TemporalProblem p;
-  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(length, 0, 0));
-  p.limits.max_velocity = Eigen::Vector3d::Constant(2.0);
-  p.limits.max_acceleration = Eigen::Vector3d::Constant(1.0);
-  p.cells_per_piece = K;
-  return p;
-}
+using test_support::LineProblem;
+using test_support::RandomWalk;
+using test_support::RestToRestTime;
+using test_support::Segment;
+using test_support::WalkProblem;
 
 std::vector<TemporalBackend> Backends() { return {TemporalBackend::kSocp, TemporalBackend::kIpopt}; }
 
@@ -214,24 +195,9 @@ TEST_P(BothBackends, InvalidInputNamesTheField) {
   }
 }
 
-Waypoints RandomWaypoints(std::mt19937& rng, int count) {
-  std::uniform_real_distribution<double> u(-4.0, 4.0);
-  Waypoints w(3, count);
-  w.col(0) = Eigen::Vector3d(u(rng), u(rng), u(rng));
-  for (int i = 1; i < count; ++i) {
-    w.col(i) = w.col(i - 1) + Eigen::Vector3d(u(rng), u(rng), 0.3 * u(rng));
-  }
-  return w;
-}
-
 TemporalProblem RandomProblem(std::mt19937& rng, int pieces, bool quintic, int K) {
-  TemporalProblem p;
-  const Waypoints w = RandomWaypoints(rng, pieces + 1);
-  p.curve = quintic ? MinimumJerkSpline(w) : NaturalCubicSpline(w);
-  p.limits.max_velocity = Eigen::Vector3d(3.0, 3.0, 2.0);
-  p.limits.max_acceleration = Eigen::Vector3d(2.0, 2.0, 1.5);
-  p.cells_per_piece = K;
-  return p;
+  const Waypoints w = RandomWalk(rng, pieces + 1);
+  return WalkProblem(quintic ? MinimumJerkSpline(w) : NaturalCubicSpline(w), K);
 }
 
 // Rest-to-rest minimum-jerk curves have a vanishing tangent at both ends, where the acceleration
@@ -466,7 +432,7 @@ CurveFile ChordLengthCubic(const Waypoints& w) {
 
 TEST_P(BothBackends, DurationCurveMatchesRescaledCurveAndVelocityIsContinuous) {
   std::mt19937 rng(21);
-  const CurveFile file = ChordLengthCubic(RandomWaypoints(rng, 6));
+  const CurveFile file = ChordLengthCubic(RandomWalk(rng, 6));
   TemporalProblem p = LineProblem(1.0, 30);
   p.curve = file.curve;  // rescaled to unit pieces on reading
   // The same curve rescaled by hand from the durations: identical coefficients up to rounding.
@@ -510,7 +476,7 @@ TEST(TemporalJoints, C1CurveUsesThePapersJointRule) {
 // 0.05% of T(K=800) (the target).
 TEST(TemporalConvergence, G1CurveConvergesInK) {
   std::mt19937 rng(31);
-  const CurveFile file = ChordLengthCubic(RandomWaypoints(rng, 5));
+  const CurveFile file = ChordLengthCubic(RandomWalk(rng, 5));
   TemporalProblem p = LineProblem(1.0, 200);
   p.curve = file.curve;
   const auto socp = MakeSocpTemporalSolver();

@@ -1,0 +1,118 @@
+// The whole planner (search, spatial optimizer, temporal stage) on generated maps. Collision checks
+// go to the occupancy map's voxels directly, not only through the ESDF the planner used.
+
+#include "timeopt/planner/planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "timeopt/map/esdf.h"
+#include "timeopt/map/occupancy_map.h"
+
+#include "../common/map_fixtures.h"
+
+namespace timeopt {
+namespace {
+
+using test_support::ForestFixture;
+using test_support::FreePoint;
+using test_support::WalledBox;
+
+// Smallest distance from `p` to the cubes of the occupied voxels within `reach` of it, by asking
+// the OcTree about every voxel of the surrounding block (brute force, independent of the ESDF).
+double TrueClearance(const OccupancyMap& map, const Eigen::Vector3d& p, double reach) {
+  const double r = map.resolution();
+  const Eigen::Vector3i lo = ((p.array() - reach) / r).floor().cast<int>();
+  const Eigen::Vector3i hi = ((p.array() + reach) / r).floor().cast<int>();
+  double best = reach;
+  for (int z = lo.z(); z <= hi.z(); ++z) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int x = lo.x(); x <= hi.x(); ++x) {
+        const Eigen::Vector3d corner = Eigen::Vector3d(x, y, z) * r;
+        const Eigen::Vector3d centre = corner + Eigen::Vector3d::Constant(0.5 * r);
+        if (!map.IsOccupied(centre)) continue;
+        const Eigen::Vector3d nearest = p.cwiseMax(corner).cwiseMin(corner + Eigen::Vector3d::Constant(r));
+        best = std::min(best, (p - nearest).norm());
+      }
+    }
+  }
+  return best;
+}
+
+TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
+  std::mt19937 rng(7);
+  int successes = 0, trials = 0;
+  for (uint64_t seed : {1, 2, 3}) {
+    const ForestFixture f(seed);
+    Planner planner(*f.esdf);
+    for (int pair = 0; pair < 4; ++pair) {
+      PlannerOptions options;
+      options.robot_radius = 0.3;
+      Eigen::Vector3d start = FreePoint(*f.esdf, &rng, 0.5, 0.5, 3.0);
+      Eigen::Vector3d goal = FreePoint(*f.esdf, &rng, 0.5, 7.0, 9.5);
+      const PlanResult plan = planner.Plan(start, goal, options);
+      ++trials;
+      ASSERT_TRUE(plan.is_success()) << "seed " << seed << " pair " << pair << ": "
+                                     << ToString(plan.status) << ": " << plan.message;
+      ++successes;
+      EXPECT_GE(plan.min_clearance, options.robot_radius + options.clearance_check_margin);
+      // Dense check of the curve against the occupied voxels' cubes, 0.01 m steps in s-chords:
+      // between samples the robot centre moves at most 0.005 m, the tolerance below.
+      double smallest = 1e9;
+      for (int i = 0; i < plan.curve.num_pieces(); ++i) {
+        const double chord = (plan.curve.Evaluate(i, 1.0) - plan.curve.Evaluate(i, 0.0)).norm();
+        const int n = std::max(20, static_cast<int>(std::ceil(2.0 * chord / 0.01)));
+        for (int k = 0; k <= n; ++k) {
+          smallest = std::min(smallest, TrueClearance(f.map, plan.curve.Evaluate(i, double(k) / n), 1.0));
+        }
+      }
+      EXPECT_GE(smallest, options.robot_radius - 0.005) << "seed " << seed << " pair " << pair;
+      // End points are the requested ones (the optimizer keeps start and goal fixed), to round-off.
+      EXPECT_LT((plan.curve.Evaluate(0, 0.0) - start).norm(), 1e-9);
+      EXPECT_LT((plan.curve.Evaluate(plan.curve.num_pieces() - 1, 1.0) - goal).norm(), 1e-9);
+      // Certified temporal rows: the limits hold on the dense check, up to the SOCP tolerance.
+      EXPECT_LE(plan.temporal.max_velocity_ratio, 1.0 + 1e-6);
+      EXPECT_LE(plan.temporal.max_acceleration_ratio, 1.0 + 1e-6);
+      EXPECT_GT(plan.temporal.total_time, 0.0);
+    }
+  }
+  EXPECT_EQ(successes, trials);
+}
+
+TEST(Planner, MapsSearchStatusesAndValidatesNestedOptions) {
+  const Esdf esdf(WalledBox());
+  const Eigen::Vector3d start(1.0, 2.0, 1.0), free_goal(4.0, 1.0, 1.0);
+
+  // The planner maps the statuses: the goal behind the wall is unreachable.
+  PlannerOptions plan_options;
+  EXPECT_EQ(Plan(esdf, start, Eigen::Vector3d(8.0, 2.0, 1.0), plan_options).status, PlanStatus::kUnreachable);
+  plan_options.limits.max_velocity.x() = -1.0;
+  const PlanResult bad = Plan(esdf, start, free_goal, plan_options);
+  EXPECT_EQ(bad.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(bad.message.find("max_velocity"), std::string::npos) << bad.message;
+
+  // Nested options are validated before any stage runs: a status naming the field, never an
+  // exception (Planner::Plan used to throw from the temporal solver's factory here).
+  Planner planner(esdf);
+  PlannerOptions nested;
+  nested.socp.tolerance = -1.0;
+  PlanResult r2;
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, nested));
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("options.socp.tolerance"), std::string::npos) << r2.message;
+  nested = PlannerOptions();
+  nested.limits.max_acceleration_change = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, nested));
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("max_acceleration_change"), std::string::npos) << r2.message;
+  // The same planner then plans with valid options (its solver is remade for them).
+  ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, PlannerOptions()));
+  EXPECT_TRUE(r2.is_success()) << r2.message;
+}
+
+}  // namespace
+}  // namespace timeopt
