@@ -8,6 +8,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include "timeopt/conic/solver.h"
+#include "timeopt/planner/planner.h"
+#include "timeopt/temporal/temporal_solver.h"
+
 namespace timeopt::cli {
 
 constexpr int kExitOk = 0;
@@ -21,6 +25,12 @@ inline constexpr const char* kFlightNote =
     "expected without a jerk limit: the planned trajectory holds its limits, but its acceleration "
     "steps between cells and a jerk-input vehicle overshoots at each step (README, 'Verification "
     "by simulation')";
+
+// The one mapping from the library's statuses to exit codes (exit_codes.cpp): 0 success, 2 invalid
+// input, 3 infeasible (no trajectory satisfies the limits, or no path exists), 1 anything else.
+int ExitCodeFor(TemporalStatus status);
+int ExitCodeFor(PlanStatus status);
+int ExitCodeFor(conic::Status status);
 
 using Runner = std::function<int()>;
 

@@ -15,7 +15,8 @@
 #include "commands.h"
 #include "timeopt/conic/cbf.h"
 #include "timeopt/conic/solver.h"
-#include "timeopt/io/curve_io.h"
+#include "timeopt/core/files.h"
+#include "timeopt/io/conic_io.h"
 
 namespace timeopt::cli {
 namespace {
@@ -39,39 +40,16 @@ int RunConic(const ConicArgs& args) {
   }
   std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
 
-  nlohmann::ordered_json json;
-  json["status"] = conic::ToString(result.status);
-  json["message"] = result.message;
-  // Only an optimal solve has an objective value; otherwise x is a certificate or an unconverged
-  // iterate.
-  if (result.is_success()) json["objective"] = model.FileObjective(result.primal_objective);
-  else json["objective"] = nullptr;
-  json["iterations"] = result.iterations;
-  json["solve_time_ms"] = times[times.size() / 2] * 1e3;
+  const double median = times[times.size() / 2];
+  nlohmann::ordered_json json = nlohmann::ordered_json::parse(ConicResultToJson(model, result, median));
   json["repeat"] = args.repeat;
-  json["reduced_accuracy"] = result.reduced_accuracy;
-  json["primal_residual"] = result.primal_residual;
-  json["dual_residual"] = result.dual_residual;
-  json["gap"] = result.gap;
-  json["kkt_method"] = conic::ToString(result.kkt_method);
-  json["num_variables"] = model.problem.num_variables();
-  json["num_equalities"] = model.problem.num_equalities();
-  json["num_cone_rows"] = model.problem.num_cone_rows();
-  json["x"] = std::vector<double>(result.x.data(), result.x.data() + result.x.size());
   const std::string out = json.dump(2) + "\n";
   if (args.output.empty()) std::cout << out;
   else WriteTextFile(args.output, out);
-
-  switch (result.status) {
-    case conic::Status::kOptimal:
-      return kExitOk;
-    case conic::Status::kPrimalInfeasible:
-      std::cerr << "timeopt: infeasible: " << result.message << "\n";
-      return kExitInfeasible;
-    default:
-      std::cerr << "timeopt: " << conic::ToString(result.status) << ": " << result.message << "\n";
-      return kExitFailure;
+  if (!result.is_success()) {
+    std::cerr << "timeopt: " << conic::ToString(result.status) << ": " << result.message << "\n";
   }
+  return ExitCodeFor(result.status);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/viz/esdf_slice.h"
 #include "timeopt/map/map_generators.h"
@@ -20,12 +21,16 @@ namespace timeopt::cli {
 namespace {
 
 UnknownSpace ParseUnknown(const std::string& text) {
-  return text == "occupied" ? UnknownSpace::kOccupied : UnknownSpace::kFree;
+  UnknownSpace unknown = UnknownSpace::kFree;
+  if (!FromString(text, &unknown)) {
+    throw std::invalid_argument("--unknown: expected " + EnumChoices(kUnknownSpaces));
+  }
+  return unknown;
 }
 
 void AddUnknownOption(CLI::App* sub, std::string* value) {
   sub->add_option("--unknown", *value, "Unobserved voxels count as free or occupied")
-      ->check(CLI::IsMember({"free", "occupied"}))
+      ->check(CLI::IsMember(EnumNames(kUnknownSpaces)))
       ->capture_default_str();
 }
 
@@ -48,7 +53,7 @@ std::string FormatBox(const Eigen::AlignedBox3d& box) {
 // ---- info ----
 struct InfoArgs {
   std::string map;
-  std::string unknown = "free";
+  std::string unknown = ToString(UnknownSpace::kFree);
 };
 
 int RunInfo(const InfoArgs& args) {
@@ -184,7 +189,7 @@ struct SliceArgs {
   std::string map;
   double z = 0.0;
   std::string output;
-  std::string unknown = "free";
+  std::string unknown = ToString(UnknownSpace::kFree);
   SliceImageOptions image;
 };
 

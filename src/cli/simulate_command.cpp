@@ -7,17 +7,17 @@
 // solve failed, 3 the temporal problem is infeasible, 2 invalid input.
 
 #include <cmath>
-#include <iomanip>
 #include <iostream>
 #include <stdexcept>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "timeopt/io/curve_io.h"
+#include "timeopt/core/enum_strings.h"
+#include "timeopt/core/files.h"
+#include "timeopt/io/sim_io.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
@@ -26,32 +26,20 @@
 namespace timeopt::cli {
 namespace {
 
+// The vehicle's defaults are the library's (QuadrotorSimOptions), never restated here.
 struct SimulateArgs {
   std::string problem;
   std::string samples;
   double max_velocity = 0.0;
   double max_acceleration = 0.0;
-  std::string solver = "socp";
-  double bandwidth = 10.0;
-  double control_rate = 1000.0;
-  double settle_time = 1.0;
+  std::string solver = ToString(TemporalBackend::kSocp);
+  double bandwidth = QuadrotorSimOptions().bandwidth;
+  double control_rate = 1.0 / QuadrotorSimOptions().time_step;
+  double settle_time = QuadrotorSimOptions().settle_time;
   double max_jerk = 0.0;
   std::string output;
   std::string states;
 };
-
-std::string StatesCsv(const std::vector<SimState>& states) {
-  std::ostringstream csv;
-  csv << std::setprecision(10) << "t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz,ex,ey,ez\n";
-  for (const SimState& s : states) {
-    csv << s.t;
-    for (const Eigen::Vector3d* v : {&s.position, &s.velocity, &s.acceleration, &s.jerk, &s.position_error}) {
-      csv << "," << v->x() << "," << v->y() << "," << v->z();
-    }
-    csv << "\n";
-  }
-  return csv.str();
-}
 
 int RunSimulate(const SimulateArgs& args) {
   if (args.problem.empty() == args.samples.empty()) {
@@ -94,14 +82,14 @@ int RunSimulate(const SimulateArgs& args) {
       json["total_time"] = duration;
     } else {
       const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
-      const auto solver =
-          MakeTemporalSolver(args.solver == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp);
-      const TemporalResult result = solver->Solve(problem);
+      TemporalBackend backend = TemporalBackend::kSocp;
+      if (!FromString(args.solver, &backend)) {
+        throw std::invalid_argument("--solver: expected " + EnumChoices(kTemporalBackends));
+      }
+      const TemporalResult result = MakeTemporalSolver(backend)->Solve(problem);
       if (!result.is_success()) {
         std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
-        if (result.status == TemporalStatus::kInfeasible) return kExitInfeasible;
-        if (result.status == TemporalStatus::kInvalidInput) return kExitInvalidInput;
-        return kExitFailure;
+        return ExitCodeFor(result.status);
       }
       // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
       report = sim.Fly(Trajectory(problem.curve, result.profile), problem.limits,
@@ -117,25 +105,14 @@ int RunSimulate(const SimulateArgs& args) {
     throw std::invalid_argument((recording ? "--states: " : "") + what);
   }
 
-  json["feasible"] = report.feasible;
-  json["message"] = report.message;
-  json["max_velocity_ratio"] = report.max_velocity_ratio;
-  json["max_velocity_time"] = report.max_velocity_time;
-  json["max_acceleration_ratio"] = report.max_acceleration_ratio;
-  json["max_acceleration_time"] = report.max_acceleration_time;
-  json["max_jerk"] = report.max_jerk;
-  json["max_jerk_ratio"] = report.max_jerk_ratio;
-  json["clipped_steps"] = report.clipped_steps;
-  json["max_position_error"] = report.max_position_error;
-  json["max_position_error_time"] = report.max_position_error_time;
-  json["final_position_error"] = report.final_position_error;
-  json["steps"] = report.steps;
+  const nlohmann::ordered_json flown = nlohmann::ordered_json::parse(FeasibilityReportToJson(report));
+  for (const auto& item : flown.items()) json[item.key()] = item.value();
   json["bandwidth"] = args.bandwidth;
   json["control_rate"] = args.control_rate;
   const std::string text = json.dump(2) + "\n";
   if (args.output.empty()) std::cout << text;
   else WriteTextFile(args.output, text);
-  if (!args.states.empty()) WriteTextFile(args.states, StatesCsv(report.states));
+  if (!args.states.empty()) WriteTextFile(args.states, SimStatesToCsv(report.states));
   if (!report.feasible) {
     std::cerr << "timeopt: limit exceeded in simulation: " << report.message << "\n";
     return kExitFailure;
@@ -158,7 +135,7 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
   sub->add_option("--max-acceleration", args->max_acceleration,
                   "With --samples: acceleration limit per axis, m/s^2");
   sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
-      ->check(CLI::IsMember({"socp", "ipopt"}))
+      ->check(CLI::IsMember(EnumNames(kTemporalBackends)))
       ->capture_default_str();
   sub->add_option("--bandwidth", args->bandwidth, "Tracking loop bandwidth (all poles at -W), rad/s")
       ->check(CLI::PositiveNumber)

@@ -14,7 +14,9 @@
 #include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/errors.h"
+#include "timeopt/core/files.h"
 #include "timeopt/viz/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
@@ -24,25 +26,20 @@
 namespace timeopt::cli {
 namespace {
 
-int ExitCodeFor(TemporalStatus status) {
-  switch (status) {
-    case TemporalStatus::kOptimal: return kExitOk;
-    case TemporalStatus::kInfeasible: return kExitInfeasible;
-    case TemporalStatus::kInvalidInput: return kExitInvalidInput;
-    default: return kExitFailure;
-  }
-}
-
 TemporalBackend ParseBackend(const std::string& name) {
-  return name == "ipopt" ? TemporalBackend::kIpopt : TemporalBackend::kSocp;
+  TemporalBackend backend = TemporalBackend::kSocp;
+  if (!FromString(name, &backend)) {
+    throw std::invalid_argument("--solver: expected " + EnumChoices(kTemporalBackends) + ", got '" + name + "'");
+  }
+  return backend;
 }
 
 struct TemporalArgs {
   std::string problem;
-  std::string solver = "socp";
+  std::string solver = ToString(TemporalBackend::kSocp);
   std::string output;
   std::string samples;
-  double rate = 100.0;
+  double rate = kDefaultSampleRateHz;
   std::string plot;
   std::string export_cbf;
 };
@@ -93,17 +90,18 @@ int RunTemporal(const TemporalArgs& args) {
   return exit_code;
 }
 
+// Defaults are the library's (a default TemporalProblem), never restated here.
 struct WaypointsArgs {
   std::string waypoints;
   std::string kind = "minjerk";
-  double max_velocity = 2.0;
-  double max_acceleration = 2.0;
-  int K = 50;
-  double rho = 0.0;
-  std::string solver = "socp";
-  std::string constraint_mode = "paper";
+  double max_velocity = TemporalProblem().limits.max_velocity.x();
+  double max_acceleration = TemporalProblem().limits.max_acceleration.x();
+  int K = TemporalProblem().cells_per_piece;
+  double rho = TemporalProblem().rho;
+  std::string solver = ToString(TemporalBackend::kSocp);
+  std::string constraint_mode = ToString(TemporalProblem().constraint_mode);
   std::string out_dir = "results";
-  double rate = 100.0;
+  double rate = kDefaultSampleRateHz;
 };
 
 int RunWaypoints(const WaypointsArgs& args) {
@@ -114,14 +112,13 @@ int RunWaypoints(const WaypointsArgs& args) {
   problem.limits.max_acceleration = Eigen::Vector3d::Constant(args.max_acceleration);
   problem.cells_per_piece = args.K;
   problem.rho = args.rho;
-  problem.constraint_mode =
-      args.constraint_mode == "certified" ? ConstraintMode::kCertified : ConstraintMode::kPaper;
+  if (!FromString(args.constraint_mode, &problem.constraint_mode)) {
+    throw std::invalid_argument("--constraint-mode: expected " + EnumChoices(kConstraintModes));
+  }
   problem.Validate();
 
-  std::error_code ec;
-  std::filesystem::create_directories(args.out_dir, ec);
-  if (ec) throw FileError("cannot create directory '" + args.out_dir + "': " + ec.message());
   const std::filesystem::path dir(args.out_dir);
+  EnsureParentDirectory((dir / "curve.json").string());
   WriteCurveJson(problem.curve, (dir / "curve.json").string());
 
   const auto solver = MakeTemporalSolver(ParseBackend(args.solver));
@@ -174,7 +171,7 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       "temporal", "Minimum-time temporal profile along a given curve (problem JSON of DESIGN.md)");
   sub->add_option("PROBLEM", args->problem, "Problem JSON file")->required();
   sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
-      ->check(CLI::IsMember({"socp", "ipopt"}))
+      ->check(CLI::IsMember(EnumNames(kTemporalBackends)))
       ->capture_default_str();
   sub->add_option("-o,--output", args->output, "Result JSON file (default: stdout)");
   sub->add_option("--samples", args->samples,
@@ -203,15 +200,15 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
   sub->add_option("--max-acceleration", args->max_acceleration, "Per-axis acceleration limit, m/s^2")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("-K,--cells", args->K, "Cells per piece")->check(CLI::Range(1, 100000))->capture_default_str();
+  sub->add_option("-K,--cells", args->K, "Cells per piece")->check(CLI::Range(1, kMaxCellsPerPiece))->capture_default_str();
   sub->add_option("--rho", args->rho, "Acceleration regularization weight")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--solver", args->solver, "socp or ipopt")
-      ->check(CLI::IsMember({"socp", "ipopt"}))
+      ->check(CLI::IsMember(EnumNames(kTemporalBackends)))
       ->capture_default_str();
   sub->add_option("--constraint-mode", args->constraint_mode, "paper or certified")
-      ->check(CLI::IsMember({"paper", "certified"}))
+      ->check(CLI::IsMember(EnumNames(kConstraintModes)))
       ->capture_default_str();
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "curve_json_internal.h"
+#include "json_internal.h"
 
 namespace timeopt {
 namespace internal {

@@ -2,37 +2,18 @@
 
 #include <cmath>
 #include <cstdio>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include "curve_json_internal.h"
+#include "json_internal.h"
 
 namespace timeopt {
 namespace {
 
 using nlohmann::json;
-
-void RejectUnknownKeys(const json& j, const std::set<std::string>& known, const std::string& where) {
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    if (!known.count(it.key())) {
-      throw std::invalid_argument(where + (where.empty() ? "" : ".") + it.key() +
-                                  ": unknown key");
-    }
-  }
-}
-
-// A scalar (same on every axis) or an array of 3.
-Eigen::Vector3d PerAxis(const json& j, const std::string& field) {
-  if (j.is_number()) return Eigen::Vector3d::Constant(internal::FiniteNumber(j, field));
-  const std::vector<double> v = internal::FiniteArray(j, field, 3);
-  return Eigen::Vector3d(v[0], v[1], v[2]);
-}
-
-Eigen::Vector3d Vector3(const json& j, const std::string& field) {
-  const std::vector<double> v = internal::FiniteArray(j, field, 3);
-  return Eigen::Vector3d(v[0], v[1], v[2]);
-}
+using internal::PerAxis;
+using internal::RejectUnknownKeys;
+using internal::Vector3;
 
 const json& Require(const json& j, const std::string& key, const std::string& where) {
   if (!j.contains(key)) throw std::invalid_argument(where + key + ": missing");
@@ -77,30 +58,13 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
     if (!d.is_object()) throw std::invalid_argument("discretization: expected an object");
     RejectUnknownKeys(d, {"K"}, "discretization");
     if (d.contains("K")) {
-      const json& k = d.at("K");
-      if (!k.is_number_integer()) {
-        throw std::invalid_argument("discretization.K: expected an integer, got " +
-                                    std::string(k.type_name()));
-      }
-      const long long value = k.get<long long>();
-      if (value < 1 || value > 100000) {
-        throw std::invalid_argument("discretization.K: expected 1..100000, got " +
-                                    std::to_string(value));
-      }
-      p.cells_per_piece = static_cast<int>(value);
+      p.cells_per_piece =
+          static_cast<int>(internal::IntegerInRange(d.at("K"), "discretization.K", 1, kMaxCellsPerPiece));
     }
   }
   if (j.contains("rho")) p.rho = internal::FiniteNumber(j.at("rho"), "rho");
   if (j.contains("constraint_mode")) {
-    const json& mode = j.at("constraint_mode");
-    if (mode == "paper") {
-      p.constraint_mode = ConstraintMode::kPaper;
-    } else if (mode == "certified") {
-      p.constraint_mode = ConstraintMode::kCertified;
-    } else {
-      throw std::invalid_argument("constraint_mode: expected \"paper\" or \"certified\", got " +
-                                  mode.dump());
-    }
+    p.constraint_mode = internal::EnumField(j.at("constraint_mode"), "constraint_mode", kConstraintModes);
   }
   p.Validate();
   return p;

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/errors.h"
 
 namespace timeopt {
@@ -201,6 +202,18 @@ Eigen::Vector3i IndexFromKey(const octomap::OcTreeKey& key) {
 }
 
 }  // namespace
+
+const char* ToString(UnknownSpace unknown) {
+  switch (unknown) {
+    case UnknownSpace::kFree: return "free";
+    case UnknownSpace::kOccupied: return "occupied";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& text, UnknownSpace* unknown) {
+  return EnumFromString(text, kUnknownSpaces, unknown);
+}
 
 struct OccupancyMap::Impl {
   explicit Impl(double resolution) : tree(resolution) {}

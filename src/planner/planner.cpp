@@ -7,6 +7,7 @@
 #include <sstream>
 #include <vector>
 
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
@@ -50,6 +51,10 @@ const char* ToString(PlanStatus status) {
     case PlanStatus::kTemporalFailure: return "temporal_failure";
   }
   return "unknown";
+}
+
+bool FromString(const std::string& text, PlanStatus* status) {
+  return EnumFromString(text, kPlanStatuses, status);
 }
 
 bool PlannerOptions::IsValid(std::string* error) const {

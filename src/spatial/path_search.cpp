@@ -1,7 +1,6 @@
 #include "timeopt/spatial/path_search.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -10,6 +9,7 @@
 #include <sstream>
 #include <utility>
 
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
@@ -59,6 +59,10 @@ const char* ToString(PathSearchStatus status) {
     case PathSearchStatus::kNodeLimit: return "node_limit";
   }
   return "unknown";
+}
+
+bool FromString(const std::string& text, PathSearchStatus* status) {
+  return EnumFromString(text, kPathSearchStatuses, status);
 }
 
 bool PathSearchOptions::IsValid(std::string* error) const {

@@ -7,8 +7,9 @@
 
 #include <ceres/ceres.h>
 
-#include "timeopt/core/option_check.h"
 #include "spatial_costs.h"
+#include "timeopt/core/enum_strings.h"
+#include "timeopt/core/option_check.h"
 
 namespace timeopt {
 namespace {
@@ -54,6 +55,10 @@ const char* ToString(SpatialFormulation formulation) {
   return formulation == SpatialFormulation::kSpatial ? "spatial" : "time_coupled";
 }
 
+bool FromString(const std::string& text, SpatialFormulation* formulation) {
+  return EnumFromString(text, kSpatialFormulations, formulation);
+}
+
 const char* ToString(SpatialStatus status) {
   switch (status) {
     case SpatialStatus::kConverged: return "converged";
@@ -62,6 +67,10 @@ const char* ToString(SpatialStatus status) {
     case SpatialStatus::kFailure: return "failure";
   }
   return "unknown";
+}
+
+bool FromString(const std::string& text, SpatialStatus* status) {
+  return EnumFromString(text, kSpatialStatuses, status);
 }
 
 bool SpatialOptimizerOptions::IsValid(std::string* error) const {

@@ -1,4 +1,5 @@
 #include "timeopt/temporal/discretization.h"
+#include "timeopt/core/enum_strings.h"
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +21,10 @@ const char* ToString(JointType type) {
     case JointType::kStop: return "stop";
   }
   return "unknown";
+}
+
+bool FromString(const std::string& text, JointType* type) {
+  return EnumFromString(text, kJointTypes, type);
 }
 
 namespace {

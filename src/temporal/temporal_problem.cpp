@@ -1,4 +1,5 @@
 #include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/core/enum_strings.h"
 
 #include <cmath>
 #include <sstream>
@@ -37,6 +38,10 @@ const char* ToString(ConstraintMode mode) {
   return "unknown";
 }
 
+bool FromString(const std::string& text, ConstraintMode* mode) {
+  return EnumFromString(text, kConstraintModes, mode);
+}
+
 void TemporalProblem::Validate() const {
   if (curve.empty()) throw std::invalid_argument("curve: expected at least 1 piece, got 0");
   for (int i = 0; i < curve.num_pieces(); ++i) {
@@ -71,8 +76,9 @@ void TemporalProblem::Validate() const {
     throw std::invalid_argument("discretization.K: expected at least 1 cell per piece, got " +
                                 std::to_string(cells_per_piece));
   }
-  if (cells_per_piece > 100000) {
-    throw std::invalid_argument("discretization.K: at most 100000 cells per piece, got " +
+  if (cells_per_piece > kMaxCellsPerPiece) {
+    throw std::invalid_argument("discretization.K: at most " + std::to_string(kMaxCellsPerPiece) +
+                                " cells per piece, got " +
                                 std::to_string(cells_per_piece));
   }
   if (!std::isfinite(rho) || rho < 0.0) {

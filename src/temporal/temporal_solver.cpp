@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
@@ -21,12 +22,20 @@ const char* ToString(TemporalStatus status) {
   return "unknown";
 }
 
+bool FromString(const std::string& text, TemporalStatus* status) {
+  return EnumFromString(text, kTemporalStatuses, status);
+}
+
 const char* ToString(TemporalBackend backend) {
   switch (backend) {
     case TemporalBackend::kSocp: return "socp";
     case TemporalBackend::kIpopt: return "ipopt";
   }
   return "unknown";
+}
+
+bool FromString(const std::string& text, TemporalBackend* backend) {
+  return EnumFromString(text, kTemporalBackends, backend);
 }
 
 namespace {
@@ -63,6 +72,11 @@ std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
   throw std::invalid_argument("MakeTemporalSolver: unknown backend");
 }
 
+
+namespace {
+
+// The dense feasibility check: largest |v_axis|/vmax_axis and |acc_axis|/amax_axis along the
+// exact trajectory, sampling every cell at `samples_per_cell` + 1 evenly spaced values of s.
 void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
                       int samples_per_cell, double* max_velocity_ratio,
                       double* max_acceleration_ratio) {
@@ -99,6 +113,33 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   *max_velocity_ratio = vr;
   *max_acceleration_ratio = ar;
 }
+
+// Fills total_time, objective, piece_durations, profile and the dense feasibility ratios of an
+// optimal result from the discretization's free values x (the skeleton's finishing step).
+void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
+                         const std::vector<double>& x, TemporalResult* result) {
+  const int K = d.cells_per_piece;
+  std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces),
+                                     std::vector<double>(static_cast<size_t>(K) + 1));
+  for (int i = 0; i < d.num_pieces; ++i) {
+    for (int k = 0; k <= K; ++k) {
+      // Interior-point iterates may sit a rounding error below zero.
+      b[i][k] = std::max(0.0, d.GridB(d.GridIndex(i, k), x));
+    }
+  }
+  result->profile = TemporalProfile(std::move(b));
+  result->total_time = result->profile.total_time();
+  result->piece_durations = result->profile.piece_durations();
+  double time = 0.0;
+  result->objective = d.Objective(x, &time);
+  result->status = TemporalStatus::kOptimal;
+  // 32 samples per cell: the polynomials on a cell have degree <= 2n - 1, so a 1/32 spacing
+  // resolves their extrema well below the cell's size.
+  DenseLimitRatios(problem, result->profile, 32, &result->max_velocity_ratio,
+                   &result->max_acceleration_ratio);
+}
+
+}  // namespace
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   using Clock = std::chrono::steady_clock;
@@ -167,27 +208,5 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   return result;
 }
 
-void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
-                         const std::vector<double>& x, TemporalResult* result) {
-  const int K = d.cells_per_piece;
-  std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces),
-                                     std::vector<double>(static_cast<size_t>(K) + 1));
-  for (int i = 0; i < d.num_pieces; ++i) {
-    for (int k = 0; k <= K; ++k) {
-      // Interior-point iterates may sit a rounding error below zero.
-      b[i][k] = std::max(0.0, d.GridB(d.GridIndex(i, k), x));
-    }
-  }
-  result->profile = TemporalProfile(std::move(b));
-  result->total_time = result->profile.total_time();
-  result->piece_durations = result->profile.piece_durations();
-  double time = 0.0;
-  result->objective = d.Objective(x, &time);
-  result->status = TemporalStatus::kOptimal;
-  // 32 samples per cell: the polynomials on a cell have degree <= 2n - 1, so a 1/32 spacing
-  // resolves their extrema well below the cell's size.
-  DenseLimitRatios(problem, result->profile, 32, &result->max_velocity_ratio,
-                   &result->max_acceleration_ratio);
-}
 
 }  // namespace timeopt

@@ -16,7 +16,7 @@ set(allowed_map core)
 set(allowed_spatial core curve map)
 set(allowed_sim core curve trajectory)
 set(allowed_planner core curve conic trajectory temporal map spatial)
-set(allowed_io core curve conic trajectory temporal)
+set(allowed_io core curve conic trajectory temporal map spatial sim planner)
 set(allowed_viz core curve trajectory map)
 set(modules core curve conic trajectory temporal map spatial sim planner io viz)
 

@@ -114,7 +114,7 @@ TEST_F(PlanCommand, BadInputExitsWithTwoAndAOneLineMessage) {
       {"--map " + map() + " --start 0.6,0.6,1.5 --goal 30,1,1.5", "goal_outside_map"},
       {"--map " + map() + " --start 0.6,0.6 --goal 7.4,7.4,1.5", "--start: expected x,y,z"},
       {"--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --config " + config,
-       "unknown key 'colision_weight'"},
+       "config.spatial.colision_weight: unknown key"},
       {"--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --config " + negative,
        "max_velocity"},
       {"--map " + dir_ + "/missing.bt --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5", "missing.bt"},

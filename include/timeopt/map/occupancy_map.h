@@ -12,6 +12,7 @@
 // Voxels never observed are unknown; `UnknownSpace` decides whether they count as free or
 // occupied wherever the map is turned into occupancy (IsOccupied, Rasterize, the ESDF).
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -27,6 +28,15 @@ enum class UnknownSpace {
   kFree,      // unobserved voxels are free (optimistic: what exploration planners use)
   kOccupied,  // unobserved voxels are obstacles (conservative)
 };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<UnknownSpace, 2> kUnknownSpaces = {
+    UnknownSpace::kFree,
+    UnknownSpace::kOccupied,
+};
+const char* ToString(UnknownSpace unknown);  // "free", "occupied"
+// The enumerator named `text` (as ToString writes it) into *unknown; false when none is.
+bool FromString(const std::string& text, UnknownSpace* unknown);
 
 enum class VoxelState { kUnknown, kFree, kOccupied };
 

@@ -12,6 +12,7 @@
 // The planner reads the map only through the ESDF (grid for the search, DistanceField for the
 // optimizer). Metres and seconds.
 
+#include <array>
 #include <memory>
 #include <string>
 
@@ -26,6 +27,14 @@
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
+
+// 2 m/s and 2 m/s^2 per axis, no acceleration-change bound.
+inline VehicleLimits DefaultPlannerLimits() {
+  VehicleLimits limits;
+  limits.max_velocity.setConstant(2.0);
+  limits.max_acceleration.setConstant(2.0);
+  return limits;
+}
 
 struct PlannerOptions {
   // Radius of the sphere around the curve that must stay free, metres. The search never enters a
@@ -61,9 +70,10 @@ struct PlannerOptions {
   int max_attempts = 4;
   double retry_collision_weight_factor = 4.0;
 
-  // Temporal stage. Limits default to TemporalLimits' (2 m/s, 1 m/s^2 per axis); `timeopt plan`
-  // and the forest evaluation use 2 m/s and 2 m/s^2.
-  TemporalLimits limits;
+  // Temporal stage. Limits: 2 m/s and 2 m/s^2 per axis, what `timeopt plan` and the forest
+  // evaluation fly (a small quadrotor's comfortable envelope; the temporal problem alone defaults to
+  // VehicleLimits' 2 m/s and 1 m/s^2).
+  TemporalLimits limits = DefaultPlannerLimits();
   // Cells per piece, K. 20: below the paper's 30-50, but the certified rows make the limits hold
   // between grid points anyway (only optimality is lost, a few per cent of T at most), and the
   // solve time grows linearly with K (forest_gen median 12 ms at K = 30, 7 ms at K = 20).
@@ -90,10 +100,27 @@ enum class PlanStatus {
   kTemporalInfeasible,  // no time allocation meets the limits
   kTemporalFailure,     // the temporal solver failed otherwise
 };
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<PlanStatus, 12> kPlanStatuses = {
+    PlanStatus::kSuccess,
+    PlanStatus::kInvalidInput,
+    PlanStatus::kStartOutsideMap,
+    PlanStatus::kGoalOutsideMap,
+    PlanStatus::kStartInCollision,
+    PlanStatus::kGoalInCollision,
+    PlanStatus::kUnreachable,
+    PlanStatus::kSearchLimit,
+    PlanStatus::kCollision,
+    PlanStatus::kSpatialFailure,
+    PlanStatus::kTemporalInfeasible,
+    PlanStatus::kTemporalFailure,
+};
 // "success", "invalid_input", "start_outside_map", "goal_outside_map", "start_in_collision",
 // "goal_in_collision", "unreachable", "search_limit", "collision", "spatial_failure",
 // "temporal_infeasible", "temporal_failure".
 const char* ToString(PlanStatus status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, PlanStatus* status);
 
 struct PlanStageTimes {
   double search_ms = 0.0;

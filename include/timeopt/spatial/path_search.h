@@ -13,6 +13,7 @@
 // A PathSearch keeps its work arrays between calls (no allocation per search after the first on
 // a map); it is not thread-safe, one object per thread.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -59,7 +60,21 @@ enum class PathSearchStatus {
   kUnreachable,       // no voxel path with the clearance exists
   kNodeLimit,         // max_expanded_nodes reached first
 };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<PathSearchStatus, 8> kPathSearchStatuses = {
+    PathSearchStatus::kSuccess,
+    PathSearchStatus::kInvalidInput,
+    PathSearchStatus::kStartOutsideMap,
+    PathSearchStatus::kGoalOutsideMap,
+    PathSearchStatus::kStartInCollision,
+    PathSearchStatus::kGoalInCollision,
+    PathSearchStatus::kUnreachable,
+    PathSearchStatus::kNodeLimit,
+};
 const char* ToString(PathSearchStatus status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, PathSearchStatus* status);
 
 struct PathSearchResult {
   PathSearchStatus status = PathSearchStatus::kInvalidInput;

@@ -21,6 +21,7 @@
 //
 // Units: metres, seconds. Costs are in the units of their integrals times their weights.
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,15 @@ enum class SpatialFormulation {
   kSpatial,      // the paper's decoupled spatial stage (no time, no dynamics)
   kTimeCoupled,  // the baseline: fixed piece durations and dynamic-feasibility penalties
 };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<SpatialFormulation, 2> kSpatialFormulations = {
+    SpatialFormulation::kSpatial,
+    SpatialFormulation::kTimeCoupled,
+};
 const char* ToString(SpatialFormulation formulation);  // "spatial", "time_coupled"
+// The enumerator named `text` (as ToString writes it) into *formulation; false when none is.
+bool FromString(const std::string& text, SpatialFormulation* formulation);
 
 enum class SpatialLinearSolver {
   kSparseNormalCholesky,  // Ceres SPARSE_NORMAL_CHOLESKY (SuiteSparse): linear in the joints
@@ -114,7 +123,17 @@ enum class SpatialStatus {
   kInvalidInput,    // bad options or waypoints; message names them; nothing usable
   kFailure,         // Ceres failed (e.g. a non-finite cost); nothing usable
 };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<SpatialStatus, 4> kSpatialStatuses = {
+    SpatialStatus::kConverged,
+    SpatialStatus::kIterationLimit,
+    SpatialStatus::kInvalidInput,
+    SpatialStatus::kFailure,
+};
 const char* ToString(SpatialStatus status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, SpatialStatus* status);
 
 // Cost terms as they enter the objective (weights included).
 struct SpatialCostBreakdown {

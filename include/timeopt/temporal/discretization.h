@@ -16,6 +16,7 @@
 // eq. 43 when the ratio is 1); at a kink or a vanishing tangent both are fixed at 0. Rows are then
 // written over x only: lower <= sum coef * x <= upper.
 
+#include <array>
 #include <limits>
 #include <optional>
 #include <string>
@@ -31,7 +32,15 @@ enum class JointType {
   kStop,  // tangents turn or vanish: the vehicle stops, b = 0 on both sides
 };
 
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<JointType, 3> kJointTypes = {
+    JointType::kC1,
+    JointType::kG1,
+    JointType::kStop,
+};
 const char* ToString(JointType type);
+// The enumerator named `text` (as ToString writes it) into *type; false when none is.
+bool FromString(const std::string& text, JointType* type);
 
 struct JointInfo {
   int joint = 0;             // between piece `joint` and `joint + 1`

@@ -10,6 +10,7 @@
 // b at grid points, a constant per cell) is described in discretization.h and in DESIGN.md.
 // SI units: metres, seconds.
 
+#include <array>
 #include <optional>
 #include <string>
 
@@ -40,7 +41,18 @@ enum class ConstraintMode {
   kCertified,
 };
 
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<ConstraintMode, 2> kConstraintModes = {
+    ConstraintMode::kPaper,
+    ConstraintMode::kCertified,
+};
 const char* ToString(ConstraintMode mode);
+// The enumerator named `text` (as ToString writes it) into *mode; false when none is.
+bool FromString(const std::string& text, ConstraintMode* mode);
+
+// The largest number of cells per piece a problem may ask for: 100000 (ds = 1e-5) is far finer
+// than any use needs, and keeps a problem's memory bounded per piece (a few MB).
+inline constexpr int kMaxCellsPerPiece = 100000;
 
 struct TemporalProblem {
   PiecewiseCurve curve;  // unit pieces, s in [0, 1] each

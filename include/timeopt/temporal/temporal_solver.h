@@ -4,6 +4,7 @@
 // problem as an Ipopt NLP for comparison. Both solve the TemporalDiscretization built from the
 // problem, so they agree up to their tolerances.
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,10 +25,28 @@ enum class TemporalStatus {
 };
 
 // "optimal", "infeasible", "iteration_limit", "numerical_error", "invalid_input".
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<TemporalStatus, 5> kTemporalStatuses = {
+    TemporalStatus::kOptimal,
+    TemporalStatus::kInfeasible,
+    TemporalStatus::kIterationLimit,
+    TemporalStatus::kNumericalError,
+    TemporalStatus::kInvalidInput,
+};
 const char* ToString(TemporalStatus status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, TemporalStatus* status);
 
 enum class TemporalBackend { kSocp, kIpopt };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<TemporalBackend, 2> kTemporalBackends = {
+    TemporalBackend::kSocp,
+    TemporalBackend::kIpopt,
+};
 const char* ToString(TemporalBackend backend);  // "socp", "ipopt"
+// The enumerator named `text` (as ToString writes it) into *backend; false when none is.
+bool FromString(const std::string& text, TemporalBackend* backend);
 
 struct TemporalResult {
   TemporalStatus status = TemporalStatus::kNumericalError;
@@ -112,16 +131,5 @@ std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);
 // conic solver, e.g. written with conic::WriteCbf. Throws std::invalid_argument when there is no
 // program to build: presolve already proved d infeasible, or every grid value is fixed.
 conic::Problem BuildTemporalSocp(const TemporalDiscretization& d);
-
-// Shared by the backends: fills total_time, objective, piece_durations, profile and the dense
-// feasibility ratios of an optimal result from the discretization's free values x.
-void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
-                         const std::vector<double>& x, TemporalResult* result);
-
-// The dense feasibility check: largest |v_axis|/vmax_axis and |acc_axis|/amax_axis along the
-// exact trajectory, sampling every cell at `samples_per_cell` + 1 evenly spaced values of s.
-void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
-                      int samples_per_cell, double* max_velocity_ratio,
-                      double* max_acceleration_ratio);
 
 }  // namespace timeopt

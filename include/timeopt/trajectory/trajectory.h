@@ -13,6 +13,10 @@
 
 namespace timeopt {
 
+// The rate at which the tools write trajectory samples unless told otherwise: 100 Hz, a common
+// setpoint rate of flight controllers' position loops.
+inline constexpr double kDefaultSampleRateHz = 100.0;
+
 struct TrajectoryState {
   double t = 0.0;  // s
   Eigen::Vector3d position = Eigen::Vector3d::Zero();      // m

@@ -1,0 +1,63 @@
+#pragma once
+
+// Library-internal JSON and CSV helpers shared by the io readers and writers (curves, problems,
+// planner configurations, samples). Every error is std::invalid_argument naming the field.
+
+#include <array>
+#include <cstddef>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <Eigen/Core>
+
+#include "timeopt/core/enum_strings.h"
+#include "timeopt/io/curve_io.h"
+
+namespace timeopt::internal {
+
+// Parses JSON text; throws std::invalid_argument "<context>: malformed JSON: ..." on syntax errors.
+nlohmann::json ParseJsonText(const std::string& text, const std::string& context);
+
+// The curve object of the contract; errors name "<context>.pieces[i].x" and so on.
+CurveFile CurveFromJson(const nlohmann::json& j, const std::string& context);
+
+// A finite number at j; throws naming `field` otherwise.
+double FiniteNumber(const nlohmann::json& j, const std::string& field);
+// An array of finite numbers of the given size (any size when expected_size < 0).
+std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field,
+                                int expected_size = -1);
+
+// Throws "<where>.<key>: unknown key" for a key of the object j that is not in `known` (a typo must
+// not fall back silently to a default). `where` may be empty.
+void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& known,
+                       const std::string& where);
+// Throws "<field>: expected an object" unless j is one.
+void RequireObject(const nlohmann::json& j, const std::string& field);
+// A scalar (the same on every axis) or an array of 3 finite numbers.
+Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field);
+// An array of 3 finite numbers.
+Eigen::Vector3d Vector3(const nlohmann::json& j, const std::string& field);
+// A number with an integer value in [lowest, highest] (30 and 30.0 both read as 30).
+long long IntegerInRange(const nlohmann::json& j, const std::string& field, long long lowest,
+                         long long highest);
+
+// The enumerator named by the string at j (FromString of its module); throws naming the field
+// and the allowed names otherwise.
+template <typename Enum, std::size_t N>
+Enum EnumField(const nlohmann::json& j, const std::string& field, const std::array<Enum, N>& all) {
+  Enum value = all[0];
+  if (!j.is_string() || !EnumFromString(j.get<std::string>(), all, &value)) {
+    throw std::invalid_argument(field + ": expected " + EnumChoices(all) + ", got " + j.dump());
+  }
+  return value;
+}
+
+// The comma-separated numbers of one CSV row (blanks around fields ignored); throws
+// std::invalid_argument "<where>: 'field' is not a number" (or "is not finite").
+std::vector<double> CsvNumbers(const std::string& row, const std::string& where);
+
+}  // namespace timeopt::internal
