@@ -380,21 +380,15 @@ double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const 
   return worst;
 }
 
-TemporalDiscretization Discretize(const TemporalProblem& problem) {
-  problem.Validate();
+namespace {
+
+// ---- the stages of Discretize, in the order it runs them ----
+
+// The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
+void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
   const PiecewiseCurve& curve = problem.curve;
   const int m = curve.num_pieces();
-  const int K = problem.cells_per_piece;
-  const double ds = 1.0 / K;
-  const TemporalLimits& limits = problem.limits;
-
-  TemporalDiscretization d;
-  d.num_pieces = m;
-  d.cells_per_piece = K;
-  d.rho = problem.rho;
-  d.grid.resize(static_cast<size_t>(m) * static_cast<size_t>(K + 1));
-
-  // ---- joints ----
   for (int i = 0; i + 1 < m; ++i) {
     const Eigen::Vector3d t0 = curve.Evaluate(i, 1.0, 1), t1 = curve.Evaluate(i + 1, 0.0, 1);
     JointInfo j;
@@ -419,8 +413,19 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
     }
     d.joints.push_back(j);
   }
+}
 
-  // ---- grid values ----
+// One grid value per grid point: a scaled free variable, a fixed value (boundary speeds, stops),
+// or a value shared with the previous piece at a smooth joint. Returns the tangent f'(k ds) at
+// every grid point, also used by the paper's velocity rows.
+std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
+                                              TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const PiecewiseCurve& curve = problem.curve;
+  const int m = curve.num_pieces();
+  const int K = problem.cells_per_piece;
+  const double ds = 1.0 / K;
+  const TemporalLimits& limits = problem.limits;
   // A new variable of piece i is x = b / S_i with S_i = vref^2 / T_i^2, T_i the piece's largest
   // tangent length on the grid and vref the largest velocity limit: x is then about the squared
   // speed relative to the limit. Unscaled b spans 1 to 1e4 on curves with short, slow pieces (a time
@@ -470,7 +475,15 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   d.num_vars = next_var;
   d.var_upper.assign(static_cast<size_t>(next_var), std::numeric_limits<double>::infinity());
 
-  // ---- cells ----
+  return grid_tangent;
+}
+
+// The cells, and the verdict on a piece of one cell that must start and end at rest.
+void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const int m = problem.curve.num_pieces();
+  const int K = problem.cells_per_piece;
+  const double ds = 1.0 / K;
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) d.cells.push_back(Cell{i, d.GridIndex(i, k), ds});
   }
@@ -483,42 +496,53 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       if (!d.infeasible_reason) d.infeasible_reason = ss.str();
     }
   }
+}
 
-  RowBuilder row(d);
-  const auto vmax2 = limits.max_velocity.cwiseProduct(limits.max_velocity);
-
-  // ---- velocity at grid points (paper mode, eq. 41): f'_axis(s_k)^2 b_k <= vmax^2 ----
-  if (problem.constraint_mode == ConstraintMode::kPaper) {
-    for (int i = 0; i < m; ++i) {
-      for (int k = 0; k <= K; ++k) {
-        const int g = d.GridIndex(i, k);
-        const GridValue& v = d.grid[static_cast<size_t>(g)];
-        const Eigen::Vector3d& t = grid_tangent[static_cast<size_t>(g)];
-        for (int a = 0; a < 3; ++a) {
-          // A tangent component that vanishes up to rounding (e.g. 1e-15 on an axis the curve
-          // does not move along) bounds nothing but would put a huge number (vmax^2 / 1e-30) into
-          // the problem data.
-          if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
-          const double t2 = t(a) * t(a);
-          if (v.var >= 0) {
-            double& ub = d.var_upper[static_cast<size_t>(v.var)];
-            ub = std::min(ub, vmax2(a) / (t2 * v.scale));
-          } else {
-            row.Add(g, t2);
-            row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
-                       vmax2(a), [&] {
-                         return std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
-                                std::to_string(i) + " s=" + std::to_string(k * ds);
-                       });
-          }
+// Velocity at grid points (paper mode, eq. 41): f'_axis(s_k)^2 b_k <= vmax^2.
+void AddPaperVelocityRows(const TemporalProblem& problem,
+                          const std::vector<Eigen::Vector3d>& grid_tangent, RowBuilder& row,
+                          TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const int m = problem.curve.num_pieces();
+  const int K = problem.cells_per_piece;
+  const double ds = 1.0 / K;
+  const auto vmax2 = problem.limits.max_velocity.cwiseProduct(problem.limits.max_velocity);
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k <= K; ++k) {
+      const int g = d.GridIndex(i, k);
+      const GridValue& v = d.grid[static_cast<size_t>(g)];
+      const Eigen::Vector3d& t = grid_tangent[static_cast<size_t>(g)];
+      for (int a = 0; a < 3; ++a) {
+        // A tangent component that vanishes up to rounding (e.g. 1e-15 on an axis the curve
+        // does not move along) bounds nothing but would put a huge number (vmax^2 / 1e-30) into
+        // the problem data.
+        if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
+        const double t2 = t(a) * t(a);
+        if (v.var >= 0) {
+          double& ub = d.var_upper[static_cast<size_t>(v.var)];
+          ub = std::min(ub, vmax2(a) / (t2 * v.scale));
+        } else {
+          row.Add(g, t2);
+          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
+                     vmax2(a), [&] {
+                       return std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
+                              std::to_string(i) + " s=" + std::to_string(k * ds);
+                     });
         }
       }
     }
   }
+}
 
-  // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on
-  // (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
-  // rows and by the acceleration-change rows in both modes.
+// Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on
+// (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
+// rows and by the acceleration-change rows in both modes. Also sets acceleration_norm_scale.
+std::vector<Eigen::Matrix<double, 3, 2>> MidCellAccelerations(const TemporalProblem& problem,
+                                                               TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const PiecewiseCurve& curve = problem.curve;
+  const double ds = 1.0 / problem.cells_per_piece;
+  const TemporalLimits& limits = problem.limits;
   std::vector<Eigen::Matrix<double, 3, 2>> mid_acc(d.cells.size());
   std::vector<double> caps;  // for acceleration_norm_scale
   caps.reserve(d.cells.size());
@@ -549,7 +573,20 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
     if (scale > 0.0 && std::isfinite(scale)) d.acceleration_norm_scale = scale;
   }
 
-  // ---- per-cell rows over (b^k, b^{k+1}) ----
+  return mid_acc;
+}
+
+// Per-cell rows over (b^k, b^{k+1}): the paper's acceleration at the cell middle, or certified
+// mode's Bernstein coefficients of velocity and acceleration over the whole cell.
+void AddCellRows(const TemporalProblem& problem,
+                 const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc, RowBuilder& row,
+                 TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const PiecewiseCurve& curve = problem.curve;
+  const int m = curve.num_pieces();
+  const double ds = 1.0 / problem.cells_per_piece;
+  const TemporalLimits& limits = problem.limits;
+  const auto vmax2 = limits.max_velocity.cwiseProduct(limits.max_velocity);
   // Every velocity and acceleration row of a cell involves only its two grid values, so after
   // dividing by its limit it reads w . (b^k, b^{k+1}) <= 1. With b >= 0 only the rows on the
   // upper-right convex hull of the points w can be active (see PruneCellRows); the others are
@@ -622,35 +659,63 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
       });
     }
   }
-
-  if (problem.prune_redundant_rows) KeepTightestUpperBounds(&d);
-
-  // ---- acceleration change (eqs. 44-45, 48-49) ----
-  if (limits.max_acceleration_change) {
-    const double lambda = *limits.max_acceleration_change;
-    for (int a = 0; a < 3; ++a) {
-      for (size_t ci = 0; ci + 1 < d.cells.size(); ++ci) {
-        row.Add(d.cells[ci + 1].first_grid, mid_acc[ci + 1](a, 0));
-        row.Add(d.cells[ci + 1].first_grid + 1, mid_acc[ci + 1](a, 1));
-        row.Add(d.cells[ci].first_grid, -mid_acc[ci](a, 0));
-        row.Add(d.cells[ci].first_grid + 1, -mid_acc[ci](a, 1));
-        row.Finish(LinearRow::Kind::kAccelerationChange, -lambda, lambda,
-                   [&] { return std::string("acceleration change on axis ") + kAxisNames[a]; });
-      }
-      const size_t last = d.cells.size() - 1;
-      const double a0 = problem.boundary.start_acceleration(a);
-      const double af = problem.boundary.end_acceleration(a);
-      row.Add(d.cells[0].first_grid, mid_acc[0](a, 0));
-      row.Add(d.cells[0].first_grid + 1, mid_acc[0](a, 1));
-      row.Finish(LinearRow::Kind::kBoundaryAcceleration, a0 - lambda, a0 + lambda,
-                 [&] { return std::string("first cell's acceleration on axis ") + kAxisNames[a]; });
-      row.Add(d.cells[last].first_grid, mid_acc[last](a, 0));
-      row.Add(d.cells[last].first_grid + 1, mid_acc[last](a, 1));
-      row.Finish(LinearRow::Kind::kBoundaryAcceleration, af - lambda, af + lambda,
-                 [&] { return std::string("last cell's acceleration on axis ") + kAxisNames[a]; });
-    }
-  }
-  return d;
 }
 
+// Acceleration change (eqs. 44-45) between neighbouring cells and against the boundary
+// accelerations (eqs. 48-49), when max_acceleration_change is set.
+void AddAccelerationChangeRows(const TemporalProblem& problem,
+                               const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc,
+                               RowBuilder& row, TemporalDiscretization* out) {
+  TemporalDiscretization& d = *out;
+  const TemporalLimits& limits = problem.limits;
+  if (!limits.max_acceleration_change) return;
+  const double lambda = *limits.max_acceleration_change;
+  for (int a = 0; a < 3; ++a) {
+    for (size_t ci = 0; ci + 1 < d.cells.size(); ++ci) {
+      row.Add(d.cells[ci + 1].first_grid, mid_acc[ci + 1](a, 0));
+      row.Add(d.cells[ci + 1].first_grid + 1, mid_acc[ci + 1](a, 1));
+      row.Add(d.cells[ci].first_grid, -mid_acc[ci](a, 0));
+      row.Add(d.cells[ci].first_grid + 1, -mid_acc[ci](a, 1));
+      row.Finish(LinearRow::Kind::kAccelerationChange, -lambda, lambda,
+                 [&] { return std::string("acceleration change on axis ") + kAxisNames[a]; });
+    }
+    const size_t last = d.cells.size() - 1;
+    const double a0 = problem.boundary.start_acceleration(a);
+    const double af = problem.boundary.end_acceleration(a);
+    row.Add(d.cells[0].first_grid, mid_acc[0](a, 0));
+    row.Add(d.cells[0].first_grid + 1, mid_acc[0](a, 1));
+    row.Finish(LinearRow::Kind::kBoundaryAcceleration, a0 - lambda, a0 + lambda,
+               [&] { return std::string("first cell's acceleration on axis ") + kAxisNames[a]; });
+    row.Add(d.cells[last].first_grid, mid_acc[last](a, 0));
+    row.Add(d.cells[last].first_grid + 1, mid_acc[last](a, 1));
+    row.Finish(LinearRow::Kind::kBoundaryAcceleration, af - lambda, af + lambda,
+               [&] { return std::string("last cell's acceleration on axis ") + kAxisNames[a]; });
+  }
+}
+
+}  // namespace
+
+TemporalDiscretization Discretize(const TemporalProblem& problem) {
+  problem.Validate();
+  const int m = problem.curve.num_pieces();
+  const int K = problem.cells_per_piece;
+  TemporalDiscretization d;
+  d.num_pieces = m;
+  d.cells_per_piece = K;
+  d.rho = problem.rho;
+  d.grid.resize(static_cast<size_t>(m) * static_cast<size_t>(K + 1));
+
+  ClassifyJoints(problem, &d);
+  const std::vector<Eigen::Vector3d> grid_tangent = AssignGridValues(problem, &d);
+  MakeCells(problem, &d);
+  RowBuilder row(d);
+  if (problem.constraint_mode == ConstraintMode::kPaper) {
+    AddPaperVelocityRows(problem, grid_tangent, row, &d);
+  }
+  const std::vector<Eigen::Matrix<double, 3, 2>> mid_acc = MidCellAccelerations(problem, &d);
+  AddCellRows(problem, mid_acc, row, &d);
+  if (problem.prune_redundant_rows) KeepTightestUpperBounds(&d);
+  AddAccelerationChangeRows(problem, mid_acc, row, &d);
+  return d;
+}
 }  // namespace timeopt
