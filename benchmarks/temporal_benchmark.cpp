@@ -20,6 +20,7 @@
 
 #include "timeopt/conic/cbf.h"
 #include "timeopt/curve/interpolation.h"
+#include "timeopt/temporal/temporal_socp.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace {

@@ -30,6 +30,8 @@
 #include "timeopt/spatial/spatial_optimizer.h"
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/temporal/temporal_result.h"
+#include "timeopt/temporal/temporal_socp.h"
 #include "timeopt/trajectory/temporal_profile.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"

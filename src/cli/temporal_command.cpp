@@ -20,6 +20,7 @@
 #include "timeopt/viz/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
+#include "timeopt/temporal/temporal_socp.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 

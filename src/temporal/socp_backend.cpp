@@ -20,6 +20,7 @@
 
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
+#include "timeopt/temporal/temporal_socp.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {

@@ -2,76 +2,18 @@
 
 // Solvers of the temporal problem: the paper's SOCP with our own conic solver, and the same
 // problem as an Ipopt NLP for comparison. Both solve the TemporalDiscretization built from the
-// problem, so they agree up to their tolerances.
+// problem, so they agree up to their tolerances. Their statuses and results are in
+// temporal_result.h; the SOCP itself, for other conic solvers, in temporal_socp.h.
 
-#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "timeopt/conic/problem.h"
 #include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
-#include "timeopt/trajectory/temporal_profile.h"
+#include "timeopt/temporal/temporal_result.h"
 
 namespace timeopt {
-
-enum class TemporalStatus {
-  kOptimal,         // profile, total_time and piece_durations are usable
-  kInfeasible,      // no time allocation satisfies the limits; message says why when known
-  kIterationLimit,  // the solver stopped first; nothing is usable
-  kNumericalError,  // the solver failed numerically; nothing is usable
-  kInvalidInput,    // the problem is malformed; message names the field
-};
-
-// "optimal", "infeasible", "iteration_limit", "numerical_error", "invalid_input".
-// Every enumerator, in declaration order (for FromString, and for listing the choices).
-inline constexpr std::array<TemporalStatus, 5> kTemporalStatuses = {
-    TemporalStatus::kOptimal,
-    TemporalStatus::kInfeasible,
-    TemporalStatus::kIterationLimit,
-    TemporalStatus::kNumericalError,
-    TemporalStatus::kInvalidInput,
-};
-const char* ToString(TemporalStatus status);
-// The enumerator named `text` (as ToString writes it) into *status; false when none is.
-bool FromString(const std::string& text, TemporalStatus* status);
-
-enum class TemporalBackend { kSocp, kIpopt };
-
-// Every enumerator, in declaration order (for FromString, and for listing the choices).
-inline constexpr std::array<TemporalBackend, 2> kTemporalBackends = {
-    TemporalBackend::kSocp,
-    TemporalBackend::kIpopt,
-};
-const char* ToString(TemporalBackend backend);  // "socp", "ipopt"
-// The enumerator named `text` (as ToString writes it) into *backend; false when none is.
-bool FromString(const std::string& text, TemporalBackend* backend);
-
-struct TemporalResult {
-  TemporalStatus status = TemporalStatus::kNumericalError;
-  std::string message;
-  std::string solver;            // "socp" or "ipopt"
-  double total_time = 0.0;       // T, seconds
-  double objective = 0.0;        // J = T + rho sum a^2 ds
-  std::vector<double> piece_durations;  // seconds
-  int iterations = 0;
-  double solve_time_seconds = 0.0;  // solver only (building excluded)
-  double build_time_seconds = 0.0;  // discretization and problem assembly
-  TemporalProfile profile;          // set when optimal
-  std::vector<JointInfo> joints;    // joint types found (C1, G1 with ratio, stop)
-  // Dense check of the exact trajectory (not only the grid): the largest |v_axis| / vmax_axis and
-  // |acc_axis| / amax_axis over all axes and a fine sampling of every cell. Set when optimal.
-  double max_velocity_ratio = 0.0;
-  double max_acceleration_ratio = 0.0;
-
-  // Optimal, but only to the backend's reduced tolerances (the conic solver's
-  // reduced_feasibility_tolerance and reduced_gap_tolerance; Ipopt's acceptable level): rounding
-  // stopped the solver short of its tolerances. `message` says why.
-  bool reduced_accuracy = false;
-
-  bool is_success() const { return status == TemporalStatus::kOptimal; }
-};
 
 // The one skeleton of both backends. Solve() (not virtual) validates and discretizes the problem,
 // answers what presolve already decides (infeasible, or every grid value fixed), times the stages,
@@ -125,11 +67,5 @@ std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);
 
-// The conic program the SOCP backend solves (see socp_backend.cpp for its variables and cones):
-// variables x (the discretization's free values), then c, d and, when rho > 0, t; its optimal value
-// is the objective J of the discretization. Exposed so that the same problem can be handed to another
-// conic solver, e.g. written with conic::WriteCbf. Throws std::invalid_argument when there is no
-// program to build: presolve already proved d infeasible, or every grid value is fixed.
-conic::Problem BuildTemporalSocp(const TemporalDiscretization& d);
 
 }  // namespace timeopt

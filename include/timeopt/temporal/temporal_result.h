@@ -1,0 +1,71 @@
+#pragma once
+
+// What a temporal solver returns: its status, the backend that produced it, and the result.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "timeopt/temporal/discretization.h"
+#include "timeopt/trajectory/temporal_profile.h"
+
+namespace timeopt {
+
+enum class TemporalStatus {
+  kOptimal,         // profile, total_time and piece_durations are usable
+  kInfeasible,      // no time allocation satisfies the limits; message says why when known
+  kIterationLimit,  // the solver stopped first; nothing is usable
+  kNumericalError,  // the solver failed numerically; nothing is usable
+  kInvalidInput,    // the problem is malformed; message names the field
+};
+
+// "optimal", "infeasible", "iteration_limit", "numerical_error", "invalid_input".
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<TemporalStatus, 5> kTemporalStatuses = {
+    TemporalStatus::kOptimal,
+    TemporalStatus::kInfeasible,
+    TemporalStatus::kIterationLimit,
+    TemporalStatus::kNumericalError,
+    TemporalStatus::kInvalidInput,
+};
+const char* ToString(TemporalStatus status);
+// The enumerator named `text` (as ToString writes it) into *status; false when none is.
+bool FromString(const std::string& text, TemporalStatus* status);
+
+enum class TemporalBackend { kSocp, kIpopt };
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<TemporalBackend, 2> kTemporalBackends = {
+    TemporalBackend::kSocp,
+    TemporalBackend::kIpopt,
+};
+const char* ToString(TemporalBackend backend);  // "socp", "ipopt"
+// The enumerator named `text` (as ToString writes it) into *backend; false when none is.
+bool FromString(const std::string& text, TemporalBackend* backend);
+
+struct TemporalResult {
+  TemporalStatus status = TemporalStatus::kNumericalError;
+  std::string message;
+  std::string solver;            // "socp" or "ipopt"
+  double total_time = 0.0;       // T, seconds
+  double objective = 0.0;        // J = T + rho sum a^2 ds
+  std::vector<double> piece_durations;  // seconds
+  int iterations = 0;
+  double solve_time_seconds = 0.0;  // solver only (building excluded)
+  double build_time_seconds = 0.0;  // discretization and problem assembly
+  TemporalProfile profile;          // set when optimal
+  std::vector<JointInfo> joints;    // joint types found (C1, G1 with ratio, stop)
+  // Dense check of the exact trajectory (not only the grid): the largest |v_axis| / vmax_axis and
+  // |acc_axis| / amax_axis over all axes and a fine sampling of every cell. Set when optimal.
+  double max_velocity_ratio = 0.0;
+  double max_acceleration_ratio = 0.0;
+
+  // Optimal, but only to the backend's reduced tolerances (the conic solver's
+  // reduced_feasibility_tolerance and reduced_gap_tolerance; Ipopt's acceptable level): rounding
+  // stopped the solver short of its tolerances. `message` says why.
+  bool reduced_accuracy = false;
+
+  bool is_success() const { return status == TemporalStatus::kOptimal; }
+};
+
+}  // namespace timeopt
