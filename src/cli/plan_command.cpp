@@ -1,5 +1,5 @@
 // `timeopt plan [--map MAP] [--start x,y,z] [--goal x,y,z] [--max-velocity V]
-//               [--max-acceleration A] [--robot-radius R] [--config FILE.json] [--output TRAJ.csv]
+//               [--max-acceleration A] [--max-jerk J] [--robot-radius R] [--config FILE.json] [--output TRAJ.csv]
 //               [--plot PLOT.png] [--unknown free|occupied]`
 // Front-end search, spatial optimization and temporal stage on an OctoMap file; prints a summary
 // JSON on stdout. Without --map it plans on the shipped default map (kDefault* below) and writes
@@ -43,7 +43,7 @@ constexpr const char* kDefaultPlot = "results/plan.png";
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
   std::string unknown = ToString(UnknownSpace::kFree);
-  std::optional<double> max_velocity, max_acceleration, robot_radius;
+  std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
 };
 
 Eigen::Vector3d ParsePoint(const std::string& text, const std::string& name) {
@@ -80,6 +80,10 @@ int RunPlan(PlanArgs args) {
   if (!args.config.empty()) options = ReadPlannerConfigJson(args.config, options);
   if (args.max_velocity) options.limits.max_velocity.setConstant(*args.max_velocity);
   if (args.max_acceleration) options.limits.max_acceleration.setConstant(*args.max_acceleration);
+  if (args.max_jerk) {
+    if (*args.max_jerk > 0.0) options.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
+    else options.limits.max_jerk.reset();
+  }
   if (args.robot_radius) options.robot_radius = *args.robot_radius;
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("options: " + error);
@@ -106,6 +110,10 @@ int RunPlan(PlanArgs args) {
   summary["robot_radius"] = options.robot_radius;
   summary["formulation"] = ToString(options.spatial.formulation);
   summary["constraint_mode"] = ToString(options.constraint_mode);
+  const auto per_axis = [](const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); };
+  summary["limits"] = {{"max_velocity", per_axis(options.limits.max_velocity)},
+                       {"max_acceleration", per_axis(options.limits.max_acceleration)},
+                       {"max_jerk", options.limits.max_jerk ? per_axis(*options.limits.max_jerk) : Json(nullptr)}};
   for (const auto& item : result.items()) summary[item.key()] = item.value();
   summary["time_ms"]["esdf"] = esdf_ms;
   const bool ok = plan.is_success();
@@ -165,6 +173,10 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
   sub->add_option("--max-acceleration", args->max_acceleration,
                   "Per-axis acceleration limit, m/s^2" + shown(defaults.limits.max_acceleration.x()))
       ->check(CLI::PositiveNumber);
+  sub->add_option("--max-jerk", args->max_jerk,
+                  "Per-axis jerk limit, m/s^3 (0: none, the paper's profile)" +
+                      (defaults.limits.max_jerk ? shown(defaults.limits.max_jerk->x()) : std::string()))
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--robot-radius", args->robot_radius,
                   "Robot radius, metres" + shown(defaults.robot_radius))
       ->check(CLI::NonNegativeNumber);

@@ -1,6 +1,7 @@
 // `timeopt temporal PROBLEM.json [--solver socp|ipopt] [--output RESULT.json]
 //                   [--samples TRAJ.csv --rate HZ] [--plot PLOT.png] [--export-cbf SOCP.cbf]`
 // `timeopt waypoints WAYPOINTS.csv [--kind cubic|minjerk] [--max-velocity V] [--max-acceleration A]
+//                   [--max-jerk J]
 //                   [-K K] [--rho RHO] [--solver socp|ipopt] --out-dir DIR`
 
 #include <filesystem>
@@ -97,6 +98,7 @@ struct WaypointsArgs {
   std::string kind = "minjerk";
   double max_velocity = TemporalProblem().limits.max_velocity.x();
   double max_acceleration = TemporalProblem().limits.max_acceleration.x();
+  double max_jerk = 0.0;  // 0: none (the paper's profile)
   int K = TemporalProblem().cells_per_piece;
   double rho = TemporalProblem().rho;
   std::string solver = ToString(TemporalBackend::kSocp);
@@ -111,6 +113,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   problem.limits.max_velocity = Eigen::Vector3d::Constant(args.max_velocity);
   problem.limits.max_acceleration = Eigen::Vector3d::Constant(args.max_acceleration);
+  if (args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   problem.cells_per_piece = args.K;
   problem.rho = args.rho;
   if (!FromString(args.constraint_mode, &problem.constraint_mode)) {
@@ -150,7 +153,9 @@ int RunWaypoints(const WaypointsArgs& args) {
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
             << problem.curve.ArcLength(1e-9) << " m)\n"
             << "limits: max_velocity " << args.max_velocity << " m/s, max_acceleration "
-            << args.max_acceleration << " m/s^2, K " << args.K << ", rho " << args.rho << ", "
+            << args.max_acceleration << " m/s^2, "
+            << (args.max_jerk > 0.0 ? "max_jerk " + std::to_string(args.max_jerk) + " m/s^3, " : std::string())
+            << "K " << args.K << ", rho " << args.rho << ", "
             << args.constraint_mode << " constraints\n"
             << "solver: " << result.solver << ", " << result.iterations << " iterations, "
             << result.solve_time_seconds * 1e3 << " ms\n"
@@ -200,6 +205,11 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--max-acceleration", args->max_acceleration, "Per-axis acceleration limit, m/s^2")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--max-jerk", args->max_jerk,
+                  "Per-axis jerk limit, m/s^3: a jerk-limited profile with continuous acceleration "
+                  "(0: none, the paper's profile)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("-K,--cells", args->K, "Cells per piece")->check(CLI::Range(1, kMaxCellsPerPiece))->capture_default_str();
   sub->add_option("--rho", args->rho, "Acceleration regularization weight")

@@ -93,7 +93,8 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
     const json& l = root.at("limits");
     const std::string where = context + ".limits";
     internal::RequireObject(l, where);
-    internal::RejectUnknownKeys(l, {"max_velocity", "max_acceleration", "max_acceleration_change"}, where);
+    internal::RejectUnknownKeys(l, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk"},
+                                where);
     if (l.contains("max_velocity")) {
       o.limits.max_velocity = internal::PerAxis(l.at("max_velocity"), where + ".max_velocity");
     }
@@ -104,6 +105,12 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
       const json& v = l.at("max_acceleration_change");
       if (v.is_null()) o.limits.max_acceleration_change.reset();
       else o.limits.max_acceleration_change = internal::FiniteNumber(v, where + ".max_acceleration_change");
+    }
+    if (l.contains("max_jerk")) {
+      // null: no jerk limit (the paper's profile, whose acceleration steps between cells).
+      const json& v = l.at("max_jerk");
+      if (v.is_null()) o.limits.max_jerk.reset();
+      else o.limits.max_jerk = internal::PerAxis(v, where + ".max_jerk");
     }
   }
   if (root.contains("temporal")) {
@@ -163,6 +170,7 @@ std::string PlannerConfigToJson(const PlannerOptions& o, int indent) {
   if (o.limits.max_acceleration_change) {
     limits["max_acceleration_change"] = *o.limits.max_acceleration_change;
   }
+  limits["max_jerk"] = o.limits.max_jerk ? Vector(*o.limits.max_jerk) : json(nullptr);
   root["limits"] = limits;
   root["temporal"] = {{"K", o.temporal_cells_per_piece},
                       {"rho", o.rho},

@@ -32,7 +32,7 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
 
   const json& limits = Require(j, "limits", "");
   if (!limits.is_object()) throw std::invalid_argument("limits: expected an object");
-  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change"},
+  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk"},
                     "limits");
   p.limits.max_velocity = PerAxis(Require(limits, "max_velocity", "limits."), "limits.max_velocity");
   p.limits.max_acceleration =
@@ -40,6 +40,10 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
   if (limits.contains("max_acceleration_change") && !limits.at("max_acceleration_change").is_null()) {
     p.limits.max_acceleration_change = internal::FiniteNumber(
         limits.at("max_acceleration_change"), "limits.max_acceleration_change");
+  }
+
+  if (limits.contains("max_jerk") && !limits.at("max_jerk").is_null()) {
+    p.limits.max_jerk = PerAxis(limits.at("max_jerk"), "limits.max_jerk");
   }
 
   if (j.contains("boundary")) {
@@ -93,6 +97,12 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   j["reduced_accuracy"] = r.reduced_accuracy;
   j["max_velocity_ratio"] = ok ? json(r.max_velocity_ratio) : json(nullptr);
   j["max_acceleration_ratio"] = ok ? json(r.max_acceleration_ratio) : json(nullptr);
+  if (r.scp_iterations > 0) {
+    // Jerk-limited results only (the paper's results keep their keys).
+    j["max_jerk_ratio"] = ok ? json(r.max_jerk_ratio) : json(nullptr);
+    j["scp_iterations"] = r.scp_iterations;
+    j["scp_history"] = r.scp_history;
+  }
   json joints = json::array();
   for (const JointInfo& ji : r.joints) {
     joints.push_back({{"joint", ji.joint}, {"type", ToString(ji.type)},

@@ -1,5 +1,4 @@
 #include "timeopt/temporal/discretization.h"
-#include "timeopt/core/enum_strings.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +10,8 @@
 
 #include <Eigen/Geometry>
 
+#include "discretization_internal.h"
+#include "timeopt/core/enum_strings.h"
 
 namespace timeopt {
 
@@ -29,141 +30,7 @@ bool FromString(const std::string& text, JointType* type) {
 
 namespace {
 
-constexpr const char* kAxisNames[3] = {"x", "y", "z"};
-
-// Relative slack for checking rows made only of constants (fixed grid values): rounding in
-// |v|^2 / |f'|^2 and back is ~1e-15; 1e-9 keeps "exactly at the limit" feasible.
-constexpr double kConstantRowSlack = 1e-9;
-
-double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
-
-// Small polynomials (ascending coefficients) on the stack: certified mode multiplies at most two
-// derivatives of a piece, so 2 * degree + 2 coefficients suffice (pieces of degree <= 30).
-constexpr int kMaxSmallPoly = 64;
-using SmallPoly = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSmallPoly, 1>;
-
-// Coefficients (ascending, in u in [0, 1]) of p(s0 + h u) for the polynomial with ascending
-// coefficients `c` in s: a Taylor shift by repeated synthetic division, then the scaling by h^j.
-SmallPoly Shifted(const SmallPoly& c, double s0, double h) {
-  const int n = static_cast<int>(c.size());
-  SmallPoly out = c;
-  for (int i = 0; i + 1 < n; ++i) {
-    for (int j = n - 2; j >= i; --j) out(j) += s0 * out(j + 1);
-  }
-  double hj = 1.0;
-  for (int j = 0; j < n; ++j) {
-    out(j) *= hj;
-    hj *= h;
-  }
-  return out;
-}
-
-SmallPoly Multiply(const SmallPoly& a, const SmallPoly& b) {
-  SmallPoly out = SmallPoly::Zero(a.size() + b.size() - 1);
-  for (int i = 0; i < a.size(); ++i) {
-    for (int j = 0; j < b.size(); ++j) out(i + j) += a(i) * b(j);
-  }
-  return out;
-}
-
-SmallPoly Padded(const SmallPoly& a, int size) {
-  SmallPoly out = SmallPoly::Zero(std::max<int>(size, static_cast<int>(a.size())));
-  out.head(a.size()) = a;
-  return out;
-}
-
-// Power-to-Bernstein conversion matrices by size, computed once per Discretize call:
-// p_k = sum_{j <= k} C(k, j) / C(n, j) a_j.
-class BernsteinTable {
- public:
-  SmallPoly Convert(const SmallPoly& a) {
-    const int size = static_cast<int>(a.size());
-    if (size >= static_cast<int>(matrices_.size())) matrices_.resize(size + 1);
-    Eigen::MatrixXd& T = matrices_[size];
-    if (T.size() == 0) {
-      T = Eigen::MatrixXd::Zero(size, size);
-      for (int k = 0; k < size; ++k) {
-        for (int j = 0; j <= k; ++j) T(k, j) = BinomialRatio(k, j, size - 1);
-      }
-    }
-    SmallPoly p = SmallPoly::Zero(size);
-    for (int k = 0; k < size; ++k) {
-      double sum = 0.0;
-      for (int j = 0; j <= k; ++j) sum += T(k, j) * a(j);
-      p(k) = sum;
-    }
-    return p;
-  }
-
- private:
-  // C(k, j) / C(n, j) as a product of ratios (no overflow for large n).
-  static double BinomialRatio(int k, int j, int n) {
-    double r = 1.0;
-    for (int i = 0; i < j; ++i) r *= static_cast<double>(k - i) / static_cast<double>(n - i);
-    return r;
-  }
-  std::vector<Eigen::MatrixXd> matrices_;
-};
-
-class RowBuilder {
- public:
-  explicit RowBuilder(TemporalDiscretization& d) : d_(d) {}
-
-  // Adds coef * b_g to the current row.
-  void Add(int g, double coef) {
-    const GridValue& v = d_.grid[static_cast<size_t>(g)];
-    if (v.var < 0) {
-      constant_ += coef * v.fixed;
-      return;
-    }
-    for (auto& t : terms_) {
-      if (t.first == v.var) {
-        t.second += coef * v.scale;
-        return;
-      }
-    }
-    terms_.emplace_back(v.var, coef * v.scale);
-  }
-
-  // Finishes the row lower <= expression <= upper; what() names it for presolve messages (called
-  // only when a constant row is found infeasible, so that building rows allocates no strings).
-  template <typename What>
-  void Finish(LinearRow::Kind kind, double lower, double upper, const What& what) {
-    std::vector<std::pair<int, double>> kept;
-    for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
-    if (kept.empty()) {
-      // Scale the slack by the finite bounds only (an infinite one would disable the check).
-      double scale = 1.0;
-      if (std::isfinite(lower)) scale = std::max(scale, std::abs(lower));
-      if (std::isfinite(upper)) scale = std::max(scale, std::abs(upper));
-      if ((std::isfinite(lower) && constant_ < lower - kConstantRowSlack * scale) ||
-          (std::isfinite(upper) && constant_ > upper + kConstantRowSlack * scale)) {
-        if (!d_.infeasible_reason) {
-          std::ostringstream ss;
-          ss << what() << " is " << constant_ << ", outside [" << lower << ", " << upper
-             << "] whatever the time allocation";
-          d_.infeasible_reason = ss.str();
-        }
-      }
-    } else {
-      LinearRow row;
-      row.kind = kind;
-      row.terms = std::move(kept);
-      row.lower = lower - constant_;
-      row.upper = upper - constant_;
-      d_.rows.push_back(std::move(row));
-    }
-    terms_.clear();
-    constant_ = 0.0;
-  }
-
- private:
-  TemporalDiscretization& d_;
-  std::vector<std::pair<int, double>> terms_;
-  double constant_ = 0.0;
-};
+using namespace internal;
 
 // One row w . (b^k, b^{k+1}) <= 1 of a cell.
 struct CellRow {
@@ -209,39 +76,6 @@ void PruneCellRows(std::vector<CellRow>* rows) {
   r = std::move(kept);
 }
 
-// Of the rows coef * x_v <= upper with coef > 0 (upper bounds on one variable; certified mode makes one
-// per grid point in each of the two cells around it, and fixed neighbours make more) keeps the
-// tightest per variable, in place of the first; the others are implied by it.
-void KeepTightestUpperBounds(TemporalDiscretization* d) {
-  std::vector<int> kept(static_cast<size_t>(d->num_vars), -1);  // row index per variable
-  std::vector<LinearRow>& rows = d->rows;
-  std::vector<bool> drop(rows.size(), false);
-  for (size_t r = 0; r < rows.size(); ++r) {
-    const LinearRow& row = rows[r];
-    if (row.terms.size() != 1 || !(row.terms[0].second > 0.0) || std::isfinite(row.lower)) continue;
-    int& k = kept[static_cast<size_t>(row.terms[0].first)];
-    if (k < 0) {
-      k = static_cast<int>(r);
-      continue;
-    }
-    const LinearRow& other = rows[static_cast<size_t>(k)];
-    // Bound upper / coef, compared without dividing: row is tighter iff upper * c_other < u_other * c.
-    if (row.upper * other.terms[0].second < other.upper * row.terms[0].second) {
-      drop[static_cast<size_t>(k)] = true;
-      k = static_cast<int>(r);
-    } else {
-      drop[r] = true;
-    }
-  }
-  size_t out = 0;
-  for (size_t r = 0; r < rows.size(); ++r) {
-    if (!drop[r]) {
-      if (out != r) rows[out] = std::move(rows[r]);
-      ++out;
-    }
-  }
-  rows.resize(out);
-}
 
 // True if x <= l A + (1 - l) C componentwise for some l in [0, 1]: then x . b <= max(A . b, C . b)
 // for every b >= 0, so the row x . b <= 1 follows from A . b <= 1 and C . b <= 1.
@@ -314,6 +148,78 @@ void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   r = std::move(out);
 }
 
+}  // namespace
+
+double TemporalDiscretization::GridB(int g, const std::vector<double>& x) const {
+  const GridValue& v = grid[static_cast<size_t>(g)];
+  return v.var < 0 ? v.fixed : v.scale * x[static_cast<size_t>(v.var)];
+}
+
+double TemporalDiscretization::Objective(const std::vector<double>& x, double* total_time) const {
+  double time = 0.0, reg = 0.0;
+  for (const Cell& c : cells) {
+    const double b0 = std::max(0.0, GridB(c.first_grid, x));
+    const double b1 = std::max(0.0, GridB(c.first_grid + 1, x));
+    const double root = std::sqrt(b0) + std::sqrt(b1);
+    time += root > 0.0 ? c.time_weight * 2.0 * c.ds / root : std::numeric_limits<double>::infinity();
+    const double a = (b1 - b0) / (2.0 * c.ds);
+    reg += a * a * c.ds;
+  }
+  if (total_time) *total_time = time;
+  return time + rho * reg;
+}
+
+double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const {
+  double worst = 0.0;
+  for (size_t v = 0; v < var_upper.size(); ++v) {
+    worst = std::max(worst, -x[v]);
+    if (std::isfinite(var_upper[v])) worst = std::max(worst, x[v] - var_upper[v]);
+  }
+  for (const LinearRow& r : rows) {
+    double value = 0.0;
+    for (const auto& t : r.terms) value += t.second * x[static_cast<size_t>(t.first)];
+    if (std::isfinite(r.lower)) worst = std::max(worst, r.lower - value);
+    if (std::isfinite(r.upper)) worst = std::max(worst, value - r.upper);
+  }
+  return worst;
+}
+
+namespace internal {
+
+// Of the rows coef * x_v <= upper with coef > 0 (upper bounds on one variable; certified mode makes one
+// per grid point in each of the two cells around it, and fixed neighbours make more) keeps the
+// tightest per variable, in place of the first; the others are implied by it.
+void KeepTightestUpperBounds(TemporalDiscretization* d) {
+  std::vector<int> kept(static_cast<size_t>(d->num_vars), -1);  // row index per variable
+  std::vector<LinearRow>& rows = d->rows;
+  std::vector<bool> drop(rows.size(), false);
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const LinearRow& row = rows[r];
+    if (row.terms.size() != 1 || !(row.terms[0].second > 0.0) || std::isfinite(row.lower)) continue;
+    int& k = kept[static_cast<size_t>(row.terms[0].first)];
+    if (k < 0) {
+      k = static_cast<int>(r);
+      continue;
+    }
+    const LinearRow& other = rows[static_cast<size_t>(k)];
+    // Bound upper / coef, compared without dividing: row is tighter iff upper * c_other < u_other * c.
+    if (row.upper * other.terms[0].second < other.upper * row.terms[0].second) {
+      drop[static_cast<size_t>(k)] = true;
+      k = static_cast<int>(r);
+    } else {
+      drop[r] = true;
+    }
+  }
+  size_t out = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (!drop[r]) {
+      if (out != r) rows[out] = std::move(rows[r]);
+      ++out;
+    }
+  }
+  rows.resize(out);
+}
+
 // Boundary grid value from a given velocity and the tangent there; a free value gets `scale`.
 GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
                         const TemporalProblem& p, const std::string& field, double scale, int* next_var) {
@@ -343,44 +249,6 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
   g.fixed = (vn / tn) * (vn / tn);
   return g;
 }
-
-}  // namespace
-
-double TemporalDiscretization::GridB(int g, const std::vector<double>& x) const {
-  const GridValue& v = grid[static_cast<size_t>(g)];
-  return v.var < 0 ? v.fixed : v.scale * x[static_cast<size_t>(v.var)];
-}
-
-double TemporalDiscretization::Objective(const std::vector<double>& x, double* total_time) const {
-  double time = 0.0, reg = 0.0;
-  for (const Cell& c : cells) {
-    const double b0 = std::max(0.0, GridB(c.first_grid, x));
-    const double b1 = std::max(0.0, GridB(c.first_grid + 1, x));
-    const double root = std::sqrt(b0) + std::sqrt(b1);
-    time += root > 0.0 ? 2.0 * c.ds / root : std::numeric_limits<double>::infinity();
-    const double a = (b1 - b0) / (2.0 * c.ds);
-    reg += a * a * c.ds;
-  }
-  if (total_time) *total_time = time;
-  return time + rho * reg;
-}
-
-double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const {
-  double worst = 0.0;
-  for (size_t v = 0; v < var_upper.size(); ++v) {
-    worst = std::max(worst, -x[v]);
-    if (std::isfinite(var_upper[v])) worst = std::max(worst, x[v] - var_upper[v]);
-  }
-  for (const LinearRow& r : rows) {
-    double value = 0.0;
-    for (const auto& t : r.terms) value += t.second * x[static_cast<size_t>(t.first)];
-    if (std::isfinite(r.lower)) worst = std::max(worst, r.lower - value);
-    if (std::isfinite(r.upper)) worst = std::max(worst, value - r.upper);
-  }
-  return worst;
-}
-
-namespace {
 
 // ---- the stages of Discretize, in the order it runs them ----
 
@@ -693,9 +561,10 @@ void AddAccelerationChangeRows(const TemporalProblem& problem,
   }
 }
 
-}  // namespace
+}  // namespace internal
 
 TemporalDiscretization Discretize(const TemporalProblem& problem) {
+  using namespace internal;
   problem.Validate();
   const int m = problem.curve.num_pieces();
   const int K = problem.cells_per_piece;

@@ -49,6 +49,7 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
   for (const Cell& cell : d.cells) {
     CellTerms c;
     c.ds = cell.ds;
+    c.tw = cell.ds * cell.time_weight;
     for (int j = 0; j < 2; ++j) {
       const GridValue& g = d.grid[static_cast<size_t>(cell.first_grid + j)];
       c.var[j] = g.var;
@@ -158,7 +159,7 @@ bool IpoptTemporalNlp::eval_f(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
   for (const CellTerms& c : cells_) {
     const double b0 = std::max(0.0, B(c, 0, x));
     const double b1 = std::max(0.0, B(c, 1, x));
-    time += 2.0 * c.ds / (std::sqrt(b0) + std::sqrt(b1));
+    time += 2.0 * c.tw / (std::sqrt(b0) + std::sqrt(b1));
     const double diff = b1 - b0;
     reg += diff * diff / (4.0 * c.ds);
   }
@@ -177,7 +178,7 @@ bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool 
     const double r1 = std::sqrt(std::max(b1, kMinDerivativeB));
     const double s = r0 + r1;
     const double reg = rho * (b1 - b0) / (2.0 * c.ds);  // dR/db1 = -dR/db0
-    const double db[2] = {-c.ds / (s * s * r0) - reg, -c.ds / (s * s * r1) + reg};
+    const double db[2] = {-c.tw / (s * s * r0) - reg, -c.tw / (s * s * r1) + reg};
     for (int j = 0; j < 2; ++j) {
       if (c.var[j] >= 0) grad_f[c.var[j]] += c.scale[j] * db[j];
     }
@@ -236,9 +237,9 @@ bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
     const double s = r0 + r1;
     const double s2 = s * s;
     const double reg = rho / (2.0 * c.ds);
-    const double h00 = c.ds / (s2 * b0) * (1.0 / s + 0.5 / r0) + reg;
-    const double h11 = c.ds / (s2 * b1) * (1.0 / s + 0.5 / r1) + reg;
-    const double h01 = c.ds / (s2 * s * r0 * r1) - reg;
+    const double h00 = c.tw / (s2 * b0) * (1.0 / s + 0.5 / r0) + reg;
+    const double h11 = c.tw / (s2 * b1) * (1.0 / s + 0.5 / r1) + reg;
+    const double h01 = c.tw / (s2 * s * r0 * r1) - reg;
     if (c.hess[0] >= 0) values[c.hess[0]] += obj_factor * c.scale[0] * c.scale[0] * h00;
     if (c.hess[1] >= 0) values[c.hess[1]] += obj_factor * c.scale[1] * c.scale[1] * h11;
     if (c.hess[2] >= 0) {

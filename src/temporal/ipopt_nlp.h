@@ -92,6 +92,7 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
     double fixed[2] = {0.0, 0.0};
     int hess[3] = {-1, -1, -1};
     double ds = 0.0;
+    double tw = 0.0;  // the time term's ds times the cell's time_weight
   };
 
   double B(const CellTerms& c, int j, const Ipopt::Number* x) const {

@@ -92,7 +92,7 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
   for (size_t k = 0; k < d.cells.size(); ++k) {
     const Cell& cell = d.cells[k];
     const int dk = d0 + static_cast<int>(k);
-    builder.SetObjectiveCoefficient(dk, 2.0 * cell.ds);
+    builder.SetObjectiveCoefficient(dk, 2.0 * cell.ds * cell.time_weight);
     set_row(0, {{dk, 1.0}}, 0.0);
     set_row(1, {}, 0.0);
     add_root(cell.first_grid, cone[1]);
@@ -132,6 +132,14 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
     builder.AddLessEqual(terms, bound);
   };
   for (const LinearRow& row : d.rows) {
+    if (row.lower == row.upper) {
+      // An equality (the jerk-limited mode's continuity of sddot): one row of A, not two opposite
+      // inequalities, which would leave the cone rows no interior.
+      terms.clear();
+      for (const auto& t : row.terms) terms.push_back({x0 + t.first, t.second});
+      builder.AddEquality(terms, row.upper);
+      continue;
+    }
     if (std::isfinite(row.upper)) add_less_equal(row, 1.0, row.upper);
     if (std::isfinite(row.lower)) add_less_equal(row, -1.0, -row.lower);
   }

@@ -1,9 +1,10 @@
 #include "timeopt/temporal/temporal_problem.h"
-#include "timeopt/core/enum_strings.h"
 
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "timeopt/core/enum_strings.h"
 
 namespace timeopt {
 namespace {
@@ -80,6 +81,26 @@ void TemporalProblem::Validate() const {
     throw std::invalid_argument("discretization.K: at most " + std::to_string(kMaxCellsPerPiece) +
                                 " cells per piece, got " +
                                 std::to_string(cells_per_piece));
+  }
+  if (limits.max_jerk) {
+    for (int a = 0; a < 3; ++a) {
+      CheckPositive((*limits.max_jerk)(a), "limits.max_jerk[" + std::to_string(a) + "]");
+    }
+    if (rho != 0.0) {
+      throw std::invalid_argument("rho: the acceleration regularization is not supported together "
+                                  "with limits.max_jerk (a jerk limit already smooths sddot); use 0");
+    }
+    if (limits.max_acceleration_change) {
+      throw std::invalid_argument("limits.max_acceleration_change: not used together with "
+                                  "limits.max_jerk (the jerk limit bounds the acceleration's change)");
+    }
+  }
+  if (!(scp_tolerance > 0.0 && scp_tolerance <= 0.1)) {
+    throw std::invalid_argument("scp_tolerance: expected a number in (0, 0.1], got " + Num(scp_tolerance));
+  }
+  if (max_scp_iterations < 1 || max_scp_iterations > 100) {
+    throw std::invalid_argument("max_scp_iterations: expected an integer in [1, 100], got " +
+                                std::to_string(max_scp_iterations));
   }
   if (!std::isfinite(rho) || rho < 0.0) {
     throw std::invalid_argument("rho: expected a finite number >= 0, got " + Num(rho));

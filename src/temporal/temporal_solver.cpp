@@ -7,6 +7,7 @@
 #include <string>
 
 #include "timeopt/core/enum_strings.h"
+#include "solver_internal.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
@@ -75,23 +76,29 @@ std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
 
 namespace {
 
-// The dense feasibility check: largest |v_axis|/vmax_axis and |acc_axis|/amax_axis along the
-// exact trajectory, sampling every cell at `samples_per_cell` + 1 evenly spaced values of s.
+// The dense feasibility check: largest |v_axis|/vmax_axis, |acc_axis|/amax_axis and (with a jerk
+// limit) |jerk_axis|/jmax_axis along the exact trajectory, sampling every cell at
+// `samples_per_cell` + 1 evenly spaced values of s.
 void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
-                      int samples_per_cell, double* max_velocity_ratio,
-                      double* max_acceleration_ratio) {
+                      int samples_per_cell, TemporalResult* result) {
   if (samples_per_cell < 1) throw std::invalid_argument("DenseLimitRatios: samples_per_cell < 1");
-  double vr = 0.0, ar = 0.0;
+  double vr = 0.0, ar = 0.0, jr = 0.0;
   const int K = profile.cells_per_piece();
   const double ds = profile.ds();
   const Eigen::Vector3d inv_v = problem.limits.max_velocity.cwiseInverse();
   const Eigen::Vector3d inv_a = problem.limits.max_acceleration.cwiseInverse();
+  const bool jerk = problem.limits.max_jerk.has_value();
+  const Eigen::Vector3d inv_j =
+      jerk ? Eigen::Vector3d(problem.limits.max_jerk->cwiseInverse()) : Eigen::Vector3d::Zero();
   for (int i = 0; i < profile.num_pieces(); ++i) {
     // The derivatives' coefficients once per piece, then Horner's rule per sample: finishing a
     // result at m = 10, K = 50 took 0.27 ms (of a 6.3 ms Solve) when the piece derived its
     // coefficients at every sample, 0.18 ms this way.
-    const PolynomialPiece::Coefficients d1 = problem.curve.piece(i).Derivative(1).coefficients();
-    const PolynomialPiece::Coefficients d2 = problem.curve.piece(i).Derivative(2).coefficients();
+    const PolynomialPiece& piece = problem.curve.piece(i);
+    const PolynomialPiece::Coefficients d1 = piece.Derivative(1).coefficients();
+    const PolynomialPiece::Coefficients d2 = piece.Derivative(2).coefficients();
+    const PolynomialPiece::Coefficients d3 =
+        piece.degree() >= 3 ? piece.Derivative(3).coefficients() : PolynomialPiece::Coefficients::Zero(3, 1);
     const auto horner = [](const PolynomialPiece::Coefficients& c, double s) {
       Eigen::Vector3d v = c.col(c.cols() - 1);
       for (Eigen::Index q = c.cols() - 2; q >= 0; --q) v = v * s + c.col(q);
@@ -99,26 +106,41 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
     };
     for (int k = 0; k < K; ++k) {
       const double b0 = profile.b(i, k), b1 = profile.b(i, k + 1);
-      const double a = profile.a(i, k);
+      const double a = jerk ? 0.0 : profile.a(i, k);
       for (int j = 0; j <= samples_per_cell; ++j) {
         const double u = static_cast<double>(j) / samples_per_cell;
-        const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
-        const double s = (k + u) * ds;
+        const double s = jerk ? profile.CellStart(i, k) + u * profile.CellLength(i, k) : (k + u) * ds;
         const Eigen::Vector3d f1 = horner(d1, s), f2 = horner(d2, s);
-        vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
-        ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+        if (!jerk) {
+          const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
+          vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
+          ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+          continue;
+        }
+        const TemporalProfile::Point p = profile.AtS(i, s);
+        const Eigen::Vector3d f3 = horner(d3, s);
+        const double v = p.sdot;
+        vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
+        ar = std::max(ar, (f1 * p.sddot + f2 * v * v).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+        const Eigen::Vector3d jerk_vector = f1 * p.sdddot + 3.0 * f2 * v * p.sddot + f3 * v * v * v;
+        jr = std::max(jr, jerk_vector.cwiseAbs().cwiseProduct(inv_j).maxCoeff());
       }
     }
   }
-  *max_velocity_ratio = vr;
-  *max_acceleration_ratio = ar;
+  result->max_velocity_ratio = vr;
+  result->max_acceleration_ratio = ar;
+  result->max_jerk_ratio = jr;
 }
+
+}  // namespace
+
+namespace internal {
 
 // Fills total_time, objective, piece_durations, profile and the dense feasibility ratios of an
 // optimal result from the discretization's free values x (the skeleton's finishing step).
 void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
                          const std::vector<double>& x, TemporalResult* result) {
-  const int K = d.cells_per_piece;
+  const int K = d.cells_per_piece;  // half cells in the jerk-limited mode
   std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces),
                                      std::vector<double>(static_cast<size_t>(K) + 1));
   for (int i = 0; i < d.num_pieces; ++i) {
@@ -127,19 +149,30 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
       b[i][k] = std::max(0.0, d.GridB(d.GridIndex(i, k), x));
     }
   }
-  result->profile = TemporalProfile(std::move(b));
+  if (d.jerk_limited) {
+    const int full = K / 2;
+    std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(d.num_pieces));
+    for (int i = 0; i < d.num_pieces; ++i) {
+      shapes[i].assign(d.shapes.begin() + i * full, d.shapes.begin() + (i + 1) * full);
+    }
+    result->profile = TemporalProfile::JerkLimited(std::move(b), std::move(shapes), d.cell_edges);
+  } else {
+    result->profile = TemporalProfile(std::move(b));
+  }
   result->total_time = result->profile.total_time();
   result->piece_durations = result->profile.piece_durations();
+  // The objective with the profile's exact time (the discretization's time of a jerk-limited cell
+  // is an approximation; for the paper's cells the two agree).
   double time = 0.0;
-  result->objective = d.Objective(x, &time);
+  const double objective = d.Objective(x, &time);
+  result->objective = d.jerk_limited ? objective - time + result->total_time : objective;
   result->status = TemporalStatus::kOptimal;
   // 32 samples per cell: the polynomials on a cell have degree <= 2n - 1, so a 1/32 spacing
   // resolves their extrema well below the cell's size.
-  DenseLimitRatios(problem, result->profile, 32, &result->max_velocity_ratio,
-                   &result->max_acceleration_ratio);
+  DenseLimitRatios(problem, result->profile, 32, result);
 }
 
-}  // namespace
+}  // namespace internal
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   using Clock = std::chrono::steady_clock;
@@ -148,6 +181,7 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   };
   TemporalResult result;
   result.solver = ToString(backend());
+  if (problem.limits.max_jerk) return SolveJerkLimited(problem);
   const Clock::time_point start = Clock::now();
   TemporalDiscretization d;
   try {
@@ -177,7 +211,7 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
         return result;
       }
       finishing = true;
-      FinishOptimalResult(problem, d, x, &result);
+      internal::FinishOptimalResult(problem, d, x, &result);
       return result;
     }
     SolveDiscretized(d, &result, &x);
@@ -189,7 +223,7 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
     }
     const std::string message = result.message;
     finishing = true;
-    FinishOptimalResult(problem, d, x, &result);
+    internal::FinishOptimalResult(problem, d, x, &result);
     result.message = message;
   } catch (const std::invalid_argument& e) {
     // From a backend: a problem it cannot represent. From finishing (validation already ran): a

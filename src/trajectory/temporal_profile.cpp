@@ -2,10 +2,187 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "timeopt/core/enum_strings.h"
+
 namespace timeopt {
+
+const char* ToString(CellShape shape) {
+  switch (shape) {
+    case CellShape::kLinear: return "linear";
+    case CellShape::kQuadratic: return "quadratic";
+    case CellShape::kRestStart: return "rest_start";
+    case CellShape::kRestEnd: return "rest_end";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& text, CellShape* shape) {
+  return EnumFromString(text, kCellShapes, shape);
+}
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// b at the middle of a rest cell, b_far (1/2)^(4/3): the value the (sigma / ds)^(4/3) shape implies.
+const double kRestMiddleRatio = std::pow(2.0, -4.0 / 3.0);
+
+// The time integral of 1 / sqrt(b) over an interval of length L on which b = b_lo + slope_lo x +
+// c2 x^2 rises, its slope b' going from slope_lo >= 0 to slope_hi >= 0 (b_hi >= b_lo). Infinite
+// when b_lo = 0 and slope_lo = 0 (b ~ c2 x^2 near x = 0, a log singularity).
+//
+// Every term below is a sum of non-negative numbers, which is why callers reflect and split a cell
+// into rising pieces first: the textbook antiderivatives subtract nearly equal logarithms or
+// angles and lose all digits as c2 -> 0.
+// - c2 > 0: P(x) = b'/2 + sqrt(c2 b) has P' = sqrt(c2) P / sqrt(b), so the time is
+//   ln(P_hi / P_lo) / sqrt(c2) = log1p(sqrt(c2) W / P_lo) / sqrt(c2), where
+//   P_hi - P_lo = sqrt(c2) W, W = sqrt(c2) L + sqrt(b_hi) - sqrt(b_lo).
+// - c2 < 0, k = sqrt(-c2): phi(x) = atan2(b'/2, k sqrt(b)) has phi' = -k / sqrt(b) and the vector
+//   (k sqrt(b), b'/2) keeps its length, so the time is (phi_lo - phi_hi) / k = atan2(k S, C) / k from
+//   the cross and dot products of the end vectors with k taken out of the cross product:
+//   S = slope_lo (sqrt(b_hi) - sqrt(b_lo)) / 2 + k^2 L sqrt(b_lo),
+//   C = k^2 sqrt(b_lo b_hi) + slope_lo slope_hi / 4.
+// - c2 = 0: b linear, 2 L / (sqrt(b_lo) + sqrt(b_hi)).
+// Both curved forms tend to the linear one as c2 -> 0 with relative rounding only (log1p(x) / y
+// and atan2(y z, w) / y stay accurate for small x, y). sqrt(b_hi) - sqrt(b_lo) is formed as
+// (b_hi - b_lo) / (sqrt(b_hi) + sqrt(b_lo)) with b_hi - b_lo = L (slope_lo + slope_hi) / 2 (b' is
+// linear): a sum of non-negative slopes, where subtracting b_lo from a b_hi that was itself
+// computed (the extremum) would lose the digits of a small rise, and the same slopes as in the
+// other terms, so that the result is the exact time of a quadratic within rounding of its data.
+double RisingTime(double b_lo, double b_hi, double slope_lo, double slope_hi, double c2, double L) {
+  if (!(L > 0.0)) return 0.0;
+  const double r_lo = std::sqrt(b_lo), r_hi = std::sqrt(b_hi);
+  const double root_sum = r_lo + r_hi;
+  if (!(root_sum > 0.0)) return kInfinity;
+  const double rise = 0.5 * L * (slope_lo + slope_hi) / root_sum;
+  if (c2 == 0.0) return 2.0 * L / root_sum;
+  if (c2 > 0.0) {
+    const double g = std::sqrt(c2);
+    const double p_lo = 0.5 * slope_lo + g * r_lo;
+    if (!(p_lo > 0.0)) return kInfinity;
+    return std::log1p(g * (g * L + rise) / p_lo) / g;
+  }
+  const double k = std::sqrt(-c2);
+  const double sine = 0.5 * slope_lo * rise + (-c2) * L * r_lo;
+  const double cosine = (-c2) * r_lo * r_hi + 0.25 * slope_lo * slope_hi;
+  return std::atan2(k * sine, cosine) / k;
+}
+
+// A quadratic cell b(sigma) = b0 + c1 sigma + c2 sigma^2 on [0, h] through b0, bm, b1.
+struct QuadraticCell {
+  double h, b0, b1, c1, c2, d1;  // d1 = b'(h)
+
+  QuadraticCell(double b0_in, double bm, double b1_in, double h_in)
+      : h(h_in),
+        b0(b0_in),
+        b1(b1_in),
+        c1((-3.0 * b0_in + 4.0 * bm - b1_in) / h_in),
+        c2(2.0 * (b0_in - 2.0 * bm + b1_in) / (h_in * h_in)),
+        d1((b0_in - 4.0 * bm + 3.0 * b1_in) / h_in) {}
+
+  // b and b' expanded about the nearer end, so that near an end where b = 0 the value keeps its
+  // relative accuracy instead of carrying the rounding of the far end's b.
+  double B(double sigma) const {
+    if (sigma <= 0.5 * h) return std::max(0.0, b0 + sigma * (c1 + c2 * sigma));
+    const double back = sigma - h;  // exact for sigma in [h/2, h] (Sterbenz)
+    return std::max(0.0, b1 + back * (d1 + c2 * back));
+  }
+  double Slope(double sigma) const {
+    return sigma <= 0.5 * h ? c1 + 2.0 * c2 * sigma : d1 + 2.0 * c2 * (sigma - h);
+  }
+
+  // b at the extremum of b when b' changes sign strictly inside the cell (c1 and d1 of opposite
+  // signs), from the end with the smaller slope (less cancellation in b - b'^2 / (4 c2)); NaN when
+  // b is monotone on the cell.
+  double VertexValue() const {
+    if (!((c1 < 0.0 && d1 > 0.0) || (c1 > 0.0 && d1 < 0.0))) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    return std::abs(c1) <= std::abs(d1) ? b0 - c1 * c1 / (4.0 * c2) : b1 - d1 * d1 / (4.0 * c2);
+  }
+
+  // Time from sigma = 0 to sigma (clamped to [0, h]): the cell is reflected or split at the
+  // extremum of b into pieces on which b rises, each timed by RisingTime. Infinite when b reaches
+  // 0 with zero slope (or drops below 0) inside.
+  double Time(double sigma) const {
+    if (!(sigma > 0.0)) return 0.0;
+    const double L = std::min(sigma, h);
+    const double bL = sigma >= h ? b1 : B(L);
+    const double dL = sigma >= h ? d1 : Slope(L);
+    if (c1 >= 0.0 && dL >= 0.0) return RisingTime(b0, bL, c1, dL, c2, L);
+    if (c1 <= 0.0 && dL <= 0.0) return RisingTime(bL, b0, -dL, -c1, c2, L);
+    // b' changes sign inside, so c2 != 0; the extremum lies -c1 / (2 c2) after the start and
+    // dL / (2 c2) before the end. Slopes carry the rounding of the b values they come from
+    // (~eps b / h), so these two need not add up to L when c2 is small: the one from the smaller
+    // slope is used, the other is what is left of L, and the extremum's b comes from that end too.
+    const bool from_start = std::abs(c1) <= std::abs(dL);
+    const double to_vertex = from_start ? -c1 / (2.0 * c2) : L - dL / (2.0 * c2);
+    const double from_vertex = L - to_vertex;
+    const double bv = from_start ? b0 - c1 * c1 / (4.0 * c2) : bL - dL * dL / (4.0 * c2);
+    if (c2 > 0.0) {  // a minimum
+      if (!(bv > 0.0)) return kInfinity;
+      return RisingTime(bv, b0, 0.0, -c1, c2, to_vertex) + RisingTime(bv, bL, 0.0, dL, c2, from_vertex);
+    }
+    // a maximum
+    return RisingTime(b0, bv, c1, 0.0, c2, to_vertex) + RisingTime(bL, bv, -dL, 0.0, c2, from_vertex);
+  }
+
+  // The sigma in [0, h] reached after time tau in [0, duration] (duration = Time(h)): Newton on
+  // Time(sigma) = tau, whose derivative is 1 / sqrt(b), kept inside a shrinking bracket and
+  // replaced by bisection when it would leave it. The start is the constant-acceleration guess
+  // sqrt(b0) tau + b'(0) tau^2 / 4. It stops when the step is below a few ulps of sigma or the
+  // residual below a few ulps of tau: Time itself is only that accurate.
+  double Sigma(double tau, double duration) const {
+    if (!(tau > 0.0)) return 0.0;
+    if (tau >= duration) return h;
+    double lo = 0.0, hi = h;
+    double sigma = std::clamp(std::sqrt(b0) * tau + 0.25 * c1 * tau * tau, 0.0, h);
+    // Bisection alone needs ~60 halvings to reach an ulp of h (more for sigma near 0), Newton a
+    // handful; 200 is a bound never reached on valid cells.
+    for (int iteration = 0; iteration < 200; ++iteration) {
+      const double residual = Time(sigma) - tau;
+      if (residual == 0.0) return sigma;
+      if (residual < 0.0) {
+        lo = sigma;
+      } else {
+        hi = sigma;
+      }
+      double next = sigma - residual * std::sqrt(B(sigma));
+      const bool newton = next > lo && next < hi;
+      if (!newton) next = 0.5 * (lo + hi);
+      if (std::abs(residual) <= 2.0 * kEps * tau) return newton ? next : sigma;
+      if (std::abs(next - sigma) <= 4.0 * kEps * next || next == lo || next == hi) return next;
+      sigma = next;
+    }
+    return sigma;
+  }
+};
+
+// Rest cells: the fraction u = tau / t1 of the cell's time t1 = 3 ds / sqrt(b_far) that has passed
+// (rest start) or is left (rest end) at sigma, u^3 = sigma / ds resp. (ds - sigma) / ds.
+double RestDuration(double ds, double b_far) { return 3.0 * ds / std::sqrt(b_far); }
+
+// The state of a rest cell from u (as above), with J = 6 ds / t1^3: sdot = J (u t1)^2 / 2 =
+// sqrt(b_far) u^2, sddot = +-J u t1, sdddot = J (positive in both: the rest-end cell brakes less
+// and less).
+void RestState(CellShape shape, double ds, double b_far, double u, TemporalProfile::Point* p) {
+  const double t1 = RestDuration(ds, b_far);
+  const double jerk = 6.0 * ds / (t1 * t1 * t1);
+  p->sdot = std::sqrt(b_far) * u * u;
+  p->sddot = (shape == CellShape::kRestStart ? 1.0 : -1.0) * jerk * u * t1;
+  p->sdddot = jerk;
+}
+
+std::string CellName(size_t piece, int k) {
+  return "cell " + std::to_string(k) + " of piece " + std::to_string(piece);
+}
+
+}  // namespace
 
 TemporalProfile::TemporalProfile(std::vector<std::vector<double>> b) : b_(std::move(b)) {
   if (b_.empty()) throw std::invalid_argument("TemporalProfile: expected at least 1 piece");
@@ -39,8 +216,128 @@ TemporalProfile::TemporalProfile(std::vector<std::vector<double>> b) : b_(std::m
   }
 }
 
+TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> half_b,
+                                             std::vector<std::vector<CellShape>> shapes,
+                                             std::vector<std::vector<double>> cell_edges) {
+  const std::string where = "TemporalProfile::JerkLimited: ";
+  if (half_b.empty()) throw std::invalid_argument(where + "expected at least 1 piece");
+  if (shapes.size() != half_b.size()) {
+    throw std::invalid_argument(where + "expected shapes for " + std::to_string(half_b.size()) +
+                                " pieces, got " + std::to_string(shapes.size()));
+  }
+  const size_t points = half_b.front().size();
+  if (points < 3 || points % 2 == 0) {
+    throw std::invalid_argument(where + "expected 2K + 1 half-grid values with K >= 1, got " +
+                                std::to_string(points));
+  }
+  TemporalProfile p;
+  p.cells_per_piece_ = static_cast<int>(points / 2);
+  const int K = p.cells_per_piece_;
+  if (!cell_edges.empty()) {
+    if (cell_edges.size() != half_b.size()) {
+      throw std::invalid_argument(where + "expected cell edges for " + std::to_string(half_b.size()) +
+                                  " pieces, got " + std::to_string(cell_edges.size()));
+    }
+    for (size_t i = 0; i < cell_edges.size(); ++i) {
+      const std::vector<double>& e = cell_edges[i];
+      bool ok = e.size() == static_cast<size_t>(K) + 1 && e.front() == 0.0 && e.back() == 1.0;
+      for (size_t k = 0; ok && k + 1 < e.size(); ++k) ok = e[k] < e[k + 1];
+      if (!ok) {
+        throw std::invalid_argument(where + "the cell edges of piece " + std::to_string(i) +
+                                    " must be K + 1 increasing values from 0 to 1");
+      }
+    }
+    p.edges_ = std::move(cell_edges);
+  }
+  p.cell_start_.reserve(half_b.size() * static_cast<size_t>(K) + 1);
+  p.cell_start_.push_back(0.0);
+  for (size_t i = 0; i < half_b.size(); ++i) {
+    std::vector<double>& h = half_b[i];
+    if (h.size() != points) {
+      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " +
+                                  std::to_string(h.size()) + " half-grid values, expected " +
+                                  std::to_string(points));
+    }
+    if (shapes[i].size() != static_cast<size_t>(K)) {
+      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " +
+                                  std::to_string(shapes[i].size()) + " cell shapes, expected " +
+                                  std::to_string(K));
+    }
+    for (size_t j = 0; j < points; ++j) {
+      if (!(h[j] >= 0.0) || !std::isfinite(h[j])) {
+        throw std::invalid_argument(where + "b of piece " + std::to_string(i) + " at half point " +
+                                    std::to_string(j) + " (cell " +
+                                    std::to_string(std::min<size_t>(j / 2, K - 1)) +
+                                    ") must be finite and >= 0");
+      }
+    }
+    for (int k = 0; k < K; ++k) {
+      const double b0 = h[2 * k], b1 = h[2 * k + 2];
+      const double ds = p.CellLength(static_cast<int>(i), k);
+      double duration = 0.0;
+      switch (shapes[i][k]) {
+        case CellShape::kLinear:
+          throw std::invalid_argument(where + CellName(i, k) +
+                                      " is linear; a jerk-limited profile takes quadratic and "
+                                      "rest cells");
+        case CellShape::kRestStart:
+          if (b0 != 0.0 || !(b1 > 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) +
+                                        " starts at rest: expected b = 0 at its start and b > 0 "
+                                        "at its end");
+          }
+          h[2 * k + 1] = kRestMiddleRatio * b1;
+          duration = RestDuration(ds, b1);
+          break;
+        case CellShape::kRestEnd:
+          if (b1 != 0.0 || !(b0 > 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) +
+                                        " ends at rest: expected b > 0 at its start and b = 0 at "
+                                        "its end");
+          }
+          h[2 * k + 1] = kRestMiddleRatio * b0;
+          duration = RestDuration(ds, b0);
+          break;
+        case CellShape::kQuadratic: {
+          const QuadraticCell cell(b0, h[2 * k + 1], b1, ds);
+          if (cell.VertexValue() < 0.0) {
+            throw std::invalid_argument(where + CellName(i, k) +
+                                        ": the quadratic b = sdot^2 drops below 0 inside");
+          }
+          duration = cell.Time(ds);
+          if (!std::isfinite(duration) || !(duration > 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) +
+                                        ": b = sdot^2 reaches 0 with zero slope (at an end or "
+                                        "inside), so the cell would take forever");
+          }
+          break;
+        }
+        default:
+          throw std::invalid_argument(where + CellName(i, k) + " has an unknown shape");
+      }
+      p.cell_start_.push_back(p.cell_start_.back() + duration);
+    }
+    std::vector<double> grid(static_cast<size_t>(K) + 1);
+    for (int k = 0; k <= K; ++k) grid[k] = h[2 * k];
+    p.b_.push_back(std::move(grid));
+  }
+  p.half_b_ = std::move(half_b);
+  p.shapes_ = std::move(shapes);
+  return p;
+}
+
 double TemporalProfile::a(int piece, int k) const {
+  if (!edges_.empty()) return (b_[piece][k + 1] - b_[piece][k]) * 0.5 / CellLength(piece, k);
   return (b_[piece][k + 1] - b_[piece][k]) * 0.5 * cells_per_piece_;
+}
+
+double TemporalProfile::half_b(int piece, int j) const {
+  if (jerk_limited()) return half_b_[piece][j];
+  return j % 2 == 0 ? b_[piece][j / 2] : 0.5 * (b_[piece][j / 2] + b_[piece][j / 2 + 1]);
+}
+
+CellShape TemporalProfile::shape(int piece, int k) const {
+  return jerk_limited() ? shapes_[piece][k] : CellShape::kLinear;
 }
 
 std::vector<double> TemporalProfile::piece_durations() const {
@@ -53,6 +350,96 @@ std::vector<double> TemporalProfile::piece_durations() const {
 
 double TemporalProfile::TimeAt(int piece, int k) const {
   return cell_start_[static_cast<size_t>(piece) * cells_per_piece_ + k];
+}
+
+double TemporalProfile::CellStart(int piece, int k) const {
+  return edges_.empty() ? k * (1.0 / cells_per_piece_) : edges_[piece][k];
+}
+
+double TemporalProfile::CellLength(int piece, int k) const {
+  return edges_.empty() ? 1.0 / cells_per_piece_ : edges_[piece][k + 1] - edges_[piece][k];
+}
+
+void TemporalProfile::Locate(int piece, double s, int* k, double* sigma) const {
+  s = std::clamp(std::isnan(s) ? 0.0 : s, 0.0, 1.0);
+  if (edges_.empty()) {
+    const double ds = 1.0 / cells_per_piece_;
+    *k = std::min(static_cast<int>(s * cells_per_piece_), cells_per_piece_ - 1);
+    *sigma = std::clamp(s - *k * ds, 0.0, ds);
+    return;
+  }
+  const std::vector<double>& e = edges_[piece];
+  *k = static_cast<int>(std::upper_bound(e.begin(), e.end(), s) - e.begin()) - 1;
+  *k = std::clamp(*k, 0, cells_per_piece_ - 1);
+  *sigma = std::clamp(s - e[*k], 0.0, e[*k + 1] - e[*k]);
+}
+
+double TemporalProfile::TimeInCell(int piece, int k, double sigma) const {
+  const double ds = CellLength(piece, k);
+  if (!(sigma > 0.0)) return 0.0;
+  switch (shape(piece, k)) {
+    case CellShape::kLinear: {
+      const double b0 = b_[piece][k];
+      const double b_sigma = std::max(0.0, b0 + 2.0 * a(piece, k) * sigma);
+      return 2.0 * sigma / (std::sqrt(b0) + std::sqrt(b_sigma));
+    }
+    case CellShape::kQuadratic:
+      return QuadraticCell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
+                           half_b_[piece][2 * k + 2], ds)
+          .Time(sigma);
+    case CellShape::kRestStart:
+      return RestDuration(ds, b_[piece][k + 1]) * std::cbrt(std::min(sigma / ds, 1.0));
+    case CellShape::kRestEnd:
+      // t1 (1 - (1 - sigma / ds)^(1/3)) without cancellation for small sigma.
+      return -RestDuration(ds, b_[piece][k]) *
+             std::expm1(std::log1p(-std::min(sigma / ds, 1.0)) / 3.0);
+  }
+  return 0.0;
+}
+
+TemporalProfile::Point TemporalProfile::StateInCell(int piece, int k, double sigma) const {
+  const double ds = CellLength(piece, k);
+  sigma = std::clamp(sigma, 0.0, ds);
+  Point p;
+  p.piece = piece;
+  p.s = std::min(CellStart(piece, k) + sigma, 1.0);
+  switch (shape(piece, k)) {
+    case CellShape::kLinear:
+      p.sddot = a(piece, k);
+      p.sdot = std::sqrt(std::max(0.0, b_[piece][k] + 2.0 * p.sddot * sigma));
+      break;
+    case CellShape::kQuadratic: {
+      const QuadraticCell cell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
+                               half_b_[piece][2 * k + 2], ds);
+      p.sdot = std::sqrt(cell.B(sigma));
+      p.sddot = 0.5 * cell.Slope(sigma);
+      p.sdddot = cell.c2 * p.sdot;
+      break;
+    }
+    case CellShape::kRestStart:
+      RestState(CellShape::kRestStart, ds, b_[piece][k + 1], std::cbrt(sigma / ds), &p);
+      break;
+    case CellShape::kRestEnd:
+      RestState(CellShape::kRestEnd, ds, b_[piece][k], std::cbrt((ds - sigma) / ds), &p);
+      break;
+  }
+  return p;
+}
+
+double TemporalProfile::TimeAtS(int piece, double s) const {
+  int k = 0;
+  double sigma = 0.0;
+  Locate(piece, s, &k, &sigma);
+  const size_t cell = static_cast<size_t>(piece) * cells_per_piece_ + k;
+  if (sigma >= CellLength(piece, k)) return cell_start_[cell + 1];
+  return cell_start_[cell] + TimeInCell(piece, k, sigma);
+}
+
+TemporalProfile::Point TemporalProfile::AtS(int piece, double s) const {
+  int k = 0;
+  double sigma = 0.0;
+  Locate(piece, s, &k, &sigma);
+  return StateInCell(piece, k, sigma);
 }
 
 TemporalProfile::Point TemporalProfile::AtTime(double t) const {
@@ -68,14 +455,44 @@ TemporalProfile::Point TemporalProfile::AtTime(double t) const {
   if (cell >= num_cells) cell = num_cells - 1;
   const int piece = static_cast<int>(cell / cells_per_piece_);
   const int k = static_cast<int>(cell % cells_per_piece_);
-  const double tau = std::min(t - cell_start_[cell], cell_start_[cell + 1] - cell_start_[cell]);
-  const double ds = 1.0 / cells_per_piece_;
-  const double v0 = std::sqrt(b_[piece][k]);
-  const double acc = a(piece, k);
-  p.piece = piece;
-  p.sddot = acc;
-  p.sdot = std::max(0.0, v0 + acc * tau);
-  p.s = std::clamp(k * ds + v0 * tau + 0.5 * acc * tau * tau, k * ds, (k + 1) * ds);
+  const double duration = cell_start_[cell + 1] - cell_start_[cell];
+  const double tau = std::min(t - cell_start_[cell], duration);
+  const double ds = CellLength(piece, k);
+  switch (shape(piece, k)) {
+    case CellShape::kLinear: {
+      const double v0 = std::sqrt(b_[piece][k]);
+      const double acc = a(piece, k);
+      p.piece = piece;
+      p.sddot = acc;
+      p.sdot = std::max(0.0, v0 + acc * tau);
+      p.s = std::clamp(k * ds + v0 * tau + 0.5 * acc * tau * tau, k * ds, (k + 1) * ds);
+      return p;
+    }
+    case CellShape::kQuadratic: {
+      const QuadraticCell q(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
+                            half_b_[piece][2 * k + 2], ds);
+      // The cell's own time, not the difference of the cumulative sums, so that tau = duration
+      // lands on sigma = ds.
+      return StateInCell(piece, k, q.Sigma(tau, q.Time(ds)));
+    }
+    case CellShape::kRestStart: {
+      // sigma = ds u^3 with u = tau / t1: the closed form in time.
+      const double t1 = RestDuration(ds, b_[piece][k + 1]);
+      const double u = std::min(tau / t1, 1.0);
+      p = StateInCell(piece, k, ds * u * u * u);
+      RestState(CellShape::kRestStart, ds, b_[piece][k + 1], u, &p);
+      return p;
+    }
+    case CellShape::kRestEnd: {
+      // u = (t1 - tau) / t1 is the fraction of time left; ds - sigma = ds u^3, so sigma =
+      // ds (1 - u^3) = ds (tau / t1) (1 + u + u^2), free of cancellation near the start.
+      const double t1 = RestDuration(ds, b_[piece][k]);
+      const double passed = std::min(tau / t1, 1.0), u = 1.0 - passed;
+      p = StateInCell(piece, k, ds * passed * (1.0 + u + u * u));
+      RestState(CellShape::kRestEnd, ds, b_[piece][k], u, &p);
+      return p;
+    }
+  }
   return p;
 }
 

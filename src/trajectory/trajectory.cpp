@@ -24,6 +24,9 @@ TrajectoryState Trajectory::Evaluate(double t) const {
   x.velocity = d.col(1) * p.sdot;
   x.acceleration = d.col(2) * p.sdot * p.sdot + d.col(1) * p.sddot;
   x.jerk = d.col(3) * p.sdot * p.sdot * p.sdot + 3.0 * d.col(2) * p.sdot * p.sddot;
+  // Skipped when zero (every linear cell) so that those results stay bit-for-bit what they were
+  // (adding 0 would turn a -0 into +0).
+  if (p.sdddot != 0.0) x.jerk += d.col(1) * p.sdddot;
   return x;
 }
 

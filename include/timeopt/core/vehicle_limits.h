@@ -18,6 +18,11 @@ struct VehicleLimits {
   // (paper eqs. 44-45) and against the boundary accelerations (eqs. 48-49), m/s^2 per cell.
   // Absent: none of these rows exist.
   std::optional<double> max_acceleration_change;
+  // Optional per-axis jerk limit |jerk_axis| <= max_jerk(axis), m/s^3; each > 0 and finite. When
+  // set, the temporal stage plans a jerk-limited profile: acceleration continuous everywhere (at
+  // piece joints and at both ends too), and velocity, acceleration and jerk within their limits on
+  // every whole cell. Absent: the paper's profiles, whose acceleration steps between cells.
+  std::optional<Eigen::Vector3d> max_jerk;
 };
 
 }  // namespace timeopt

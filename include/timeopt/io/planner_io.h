@@ -5,7 +5,7 @@
 // Configuration JSON (every key optional, unknown keys rejected; a key overrides the options given):
 //   {"robot_radius": 0.3, "safety_margin": 0.2, "max_segment_length": 1.5, "max_attempts": 4,
 //    "limits": {"max_velocity": 2.0 | [vx, vy, vz], "max_acceleration": 2.0 | [..],
-//               "max_acceleration_change": 0.5},
+//               "max_acceleration_change": 0.5, "max_jerk": 10.0 | [..] | null},
 //    "temporal": {"K": 20, "rho": 0.0, "constraint_mode": "certified" | "paper"},
 //    "spatial": {"formulation": "spatial" | "time_coupled", "smoothness_weight", "collision_weight",
 //                "length_weight", "penalty_decay_length", "collision_samples_per_piece",

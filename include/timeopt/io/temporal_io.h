@@ -5,7 +5,8 @@
 // Problem JSON:
 //   {"curve": {...curve contract, optional "durations"...},
 //    "limits": {"max_velocity": 2.0 | [vx, vy, vz], "max_acceleration": 1.0 | [ax, ay, az],
-//               "max_acceleration_change": 0.5},               (optional)
+//               "max_acceleration_change": 0.5,                (optional)
+//               "max_jerk": 10.0 | [jx, jy, jz]},              (optional: jerk-limited profile)
 //    "boundary": {"start_velocity": [..], "start_acceleration": [..],
 //                 "end_velocity": [..], "end_acceleration": [..]},   (optional: rest to rest)
 //    "discretization": {"K": 50}, "rho": 0.0, "constraint_mode": "paper" | "certified"}
@@ -27,8 +28,9 @@ TemporalProblem ReadTemporalProblemJson(const std::string& path);
 
 // {"status", "solver", "total_time", "objective", "piece_durations", "iterations",
 //  "solve_time_ms", "build_time_ms", "message", "max_velocity_ratio", "max_acceleration_ratio",
-//  "joints": [{"joint", "type", "speed_ratio", "angle"}]}. Numbers that are not meaningful for a
-// non-optimal status are null.
+//  "joints": [{"joint", "type", "speed_ratio", "angle"}]}, and for jerk-limited problems
+// "max_jerk_ratio", "scp_iterations" and "scp_history" (T after each convex solve). Numbers that
+// are not meaningful for a non-optimal status are null.
 std::string TemporalResultToJson(const TemporalResult& result, int indent = 2);
 
 // Header t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz then one row per state, full precision.

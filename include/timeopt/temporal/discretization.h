@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "timeopt/temporal/temporal_problem.h"
+#include "timeopt/trajectory/temporal_profile.h"
 
 namespace timeopt {
 
@@ -57,7 +58,14 @@ struct GridValue {
 };
 
 struct LinearRow {
-  enum class Kind { kVelocity, kAcceleration, kAccelerationChange, kBoundaryAcceleration };
+  enum class Kind {
+    kVelocity,
+    kAcceleration,
+    kAccelerationChange,
+    kBoundaryAcceleration,
+    kJerk,          // jerk-limited mode: the linearized jerk rows
+    kContinuity,    // jerk-limited mode: sddot continuous, rest-cell shape (equalities)
+  };
   Kind kind = Kind::kAcceleration;
   std::vector<std::pair<int, double>> terms;  // (var, coef), distinct vars
   double lower = -std::numeric_limits<double>::infinity();
@@ -68,6 +76,9 @@ struct Cell {
   int piece = 0;
   int first_grid = 0;  // grid index of b^k; b^{k+1} is first_grid + 1
   double ds = 0.0;
+  // The cell's time in the objective is time_weight * 2 ds / (sqrt(b^k) + sqrt(b^{k+1})). 1 but in
+  // the jerk-limited mode's rest cells, whose b is not linear (see jerk_discretization.cpp).
+  double time_weight = 1.0;
 };
 
 struct TemporalDiscretization {
@@ -85,6 +96,12 @@ struct TemporalDiscretization {
   std::vector<double> var_upper;           // upper bound of each x (>= 0, may be +inf); x >= 0
   std::vector<LinearRow> rows;             // over x, constants folded into the bounds
   std::vector<JointInfo> joints;           // m - 1 entries
+  // Jerk-limited mode (DiscretizeJerkLimited): the grid is the half grid, cells_per_piece = 2 K
+  // half cells; shapes holds the shape of each of the m K full cells in path order.
+  bool jerk_limited = false;
+  std::vector<CellShape> shapes;
+  // Jerk-limited mode: the K + 1 cell edges of every piece in [0, 1] (graded towards rest points).
+  std::vector<std::vector<double>> cell_edges;
   // Set when presolve already proves the problem infeasible (e.g. a boundary speed above the
   // limit); the backends then report infeasible with this message without solving.
   std::optional<std::string> infeasible_reason;
@@ -100,5 +117,14 @@ struct TemporalDiscretization {
 
 // Validates the problem (throws std::invalid_argument) and builds the discretization.
 TemporalDiscretization Discretize(const TemporalProblem& problem);
+
+// The jerk-limited discretization (problem.limits.max_jerk set): b on the half grid of every cell,
+// b quadratic and sddot linear and continuous on regular cells, constant s-jerk on cells that
+// leave or reach rest, and velocity, acceleration and jerk rows certified on every whole cell. The
+// jerk rows are linearized at `linearization` (b at every half-grid point, m (2 K + 1) values, of a
+// previous solution): any solution of this convex problem satisfies the true jerk limit. Without a
+// linearization the jerk rows of regular cells are left out (the first, jerk-free solve).
+TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem,
+                                             const std::vector<double>* linearization);
 
 }  // namespace timeopt

@@ -59,6 +59,12 @@ struct TemporalResult {
   // |acc_axis| / amax_axis over all axes and a fine sampling of every cell. Set when optimal.
   double max_velocity_ratio = 0.0;
   double max_acceleration_ratio = 0.0;
+  // Jerk-limited mode: the largest |jerk_axis| / max_jerk_axis on the same dense check (0
+  // otherwise), the number of convex solves of the sequential convex programme (the first one
+  // jerk-free), and T after each of them (the first one not jerk-feasible; each later one is).
+  double max_jerk_ratio = 0.0;
+  int scp_iterations = 0;
+  std::vector<double> scp_history;
 
   // Optimal, but only to the backend's reduced tolerances (the conic solver's
   // reduced_feasibility_tolerance and reduced_gap_tolerance; Ipopt's acceptable level): rounding

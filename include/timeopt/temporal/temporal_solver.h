@@ -34,6 +34,10 @@ class TemporalSolver {
   // std::invalid_argument for a problem the backend cannot represent (reported as kInvalidInput).
   virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
                                 std::vector<double>* x) = 0;
+
+ private:
+  // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited (jerk_solver.cpp).
+  TemporalResult SolveJerkLimited(const TemporalProblem& problem);
 };
 
 // Options of the SOCP backend.

@@ -2,48 +2,132 @@
 
 // The solution of a temporal problem on its grid, and the exact map between time and s.
 //
-// On every cell b = sdot^2 is linear in s and a = sddot is constant, so within a cell that starts
-// at time t_k with speed sqrt(b^k):  s(t) = s_k + sqrt(b^k) (t - t_k) + a (t - t_k)^2 / 2,
-// sdot(t) = sqrt(b^k) + a (t - t_k), and the cell takes 2 ds / (sqrt(b^k) + sqrt(b^{k+1})).
+// A profile holds b = sdot^2 on a grid of K cells of length ds = 1 / K per piece. Each cell has a
+// shape (CellShape) that says how b runs between its grid values; with sigma = s - s_k in [0, ds]:
+//
+// - kLinear (profiles from the constructor): b linear, a = sddot constant, sdddot = 0. A cell that
+//   starts at time t_k with speed sqrt(b^k) has s(t) = s_k + sqrt(b^k) (t - t_k) + a (t - t_k)^2 / 2,
+//   sdot(t) = sqrt(b^k) + a (t - t_k), and takes 2 ds / (sqrt(b^k) + sqrt(b^{k+1})).
+// - kQuadratic (jerk-limited profiles): b = b0 + c1 sigma + c2 sigma^2 through the values b0, bm, b1
+//   at sigma = 0, ds / 2, ds, so c2 = 2 (b0 - 2 bm + b1) / ds^2, c1 = (-3 b0 + 4 bm - b1) / ds, and
+//   sdot = sqrt(b), sddot = b' / 2 = (c1 + 2 c2 sigma) / 2 (linear in s, continuous across cells
+//   when the neighbours' slopes of b agree), sdddot = d(sddot)/dt = c2 sdot.
+// - kRestStart: from rest (sdot = sddot = 0) with a constant s-jerk J > 0: sigma = J tau^3 / 6,
+//   sdot = J tau^2 / 2, sddot = J tau, sdddot = J. In s, b = b1 (sigma / ds)^(4/3); the cell takes
+//   t1 = 3 ds / sqrt(b1), J = 6 ds / t1^3, and ends with sddot = b1 / (1.5 ds).
+// - kRestEnd: the time mirror, arriving at rest: with r = t1 - tau the time left, ds - sigma =
+//   J r^3 / 6, sdot = J r^2 / 2, sddot = -J r (braking, 0 at the end), sdddot = +J (the braking
+//   eases off); b = b0 ((ds - sigma) / ds)^(4/3), t1 = 3 ds / sqrt(b0), starts with sddot =
+//   -b0 / (1.5 ds).
+//
+// Cell times are closed forms of the integral of 1 / sqrt(b) (see temporal_profile.cpp for the
+// forms free of cancellation); AtTime inverts them exactly (closed form for linear and rest cells,
+// safeguarded Newton for quadratic ones).
 
+#include <array>
+#include <string>
 #include <vector>
 
 namespace timeopt {
 
+// How b = sdot^2 runs over one cell (formulas in the header comment above).
+enum class CellShape {
+  kLinear,     // b linear in s, sddot constant, sdddot = 0 (every cell of a constructor-made profile)
+  kQuadratic,  // b quadratic in s through the cell's three half-grid values; sddot linear in s
+  kRestStart,  // leaves rest (b = 0 and sddot = 0 at the cell's start) with constant sdddot > 0
+  kRestEnd,    // arrives at rest (b = 0 and sddot = 0 at the cell's end) with constant sdddot > 0
+};
+
+// Every enumerator, in declaration order (for FromString, and for listing the choices).
+inline constexpr std::array<CellShape, 4> kCellShapes = {
+    CellShape::kLinear,
+    CellShape::kQuadratic,
+    CellShape::kRestStart,
+    CellShape::kRestEnd,
+};
+const char* ToString(CellShape shape);
+// The enumerator named `text` (as ToString writes it) into *shape; false when none is.
+bool FromString(const std::string& text, CellShape* shape);
+
 class TemporalProfile {
  public:
   TemporalProfile() = default;
-  // b[i] holds the K + 1 grid values of piece i (all pieces the same K >= 1, values >= 0, a cell
-  // with b = 0 at both ends is not allowed). Throws std::invalid_argument otherwise.
+  // A profile of linear cells. b[i] holds the K + 1 grid values of piece i (all pieces the same
+  // K >= 1, values >= 0, a cell with b = 0 at both ends is not allowed). Throws
+  // std::invalid_argument otherwise.
   explicit TemporalProfile(std::vector<std::vector<double>> b);
+
+  // A jerk-limited profile. half_b[i] holds the 2K + 1 values of piece i at s = j ds / 2 (cell k
+  // spans half points 2k, 2k + 1, 2k + 2), shapes[i] the K shapes of its cells (kQuadratic,
+  // kRestStart or kRestEnd; K >= 1 and the same for all pieces). Values must be finite and >= 0.
+  // A quadratic cell must have b > 0 inside and a finite time (b reaching 0 at an end with zero
+  // slope there, e.g. b0 = 0 and c1 = 0, takes forever; b = 0 at both ends with bm > 0 is finite
+  // and allowed). A rest-start cell needs b = 0 at its start and b > 0 at its end, a rest-end cell
+  // the reverse. The middle value of a rest cell is not free: it is replaced by the value its shape
+  // implies, 2^(-4/3) times the far-end value. Throws std::invalid_argument naming piece and cell.
+  // cell_edges (optional): the K + 1 edges of every piece's cells in s, increasing from 0 to 1, for
+  // a grid graded towards rest points; the half points are then the cells' middles. Empty: K equal
+  // cells of ds = 1 / K.
+  static TemporalProfile JerkLimited(std::vector<std::vector<double>> half_b,
+                                     std::vector<std::vector<CellShape>> shapes,
+                                     std::vector<std::vector<double>> cell_edges = {});
 
   int num_pieces() const { return static_cast<int>(b_.size()); }
   int cells_per_piece() const { return cells_per_piece_; }
   double ds() const { return 1.0 / cells_per_piece_; }
-  // b = sdot^2 at grid point k of piece i.
+  // Where cell k of piece i starts in s, and its length (1 / K each unless cell_edges were given).
+  double CellStart(int piece, int k) const;
+  double CellLength(int piece, int k) const;
+  // True for a profile made by JerkLimited.
+  bool jerk_limited() const { return !shapes_.empty(); }
+  // b = sdot^2 at grid point k of piece i (half point 2k of a jerk-limited profile).
   double b(int piece, int k) const { return b_[piece][k]; }
   const std::vector<std::vector<double>>& b() const { return b_; }
-  // a = sddot on cell k of piece i: (b^{k+1} - b^k) / (2 ds).
+  // b at half point j = 0..2K of piece i, s = j ds / 2. For a linear profile the odd points are
+  // the cell midpoints (b^k + b^{k+1}) / 2.
+  double half_b(int piece, int j) const;
+  // The shape of cell k of piece i (kLinear for every cell of a constructor-made profile).
+  CellShape shape(int piece, int k) const;
+  // (b^{k+1} - b^k) / (2 ds): on a linear cell a = sddot; on any other cell the mean of sddot over
+  // the cell in s (sddot = b'(s) / 2), not its value anywhere in particular. Use AtS for values.
   double a(int piece, int k) const;
 
   double total_time() const { return cell_start_.empty() ? 0.0 : cell_start_.back(); }
   std::vector<double> piece_durations() const;
   // Time at which the vehicle passes grid point k of piece i.
   double TimeAt(int piece, int k) const;
+  // Time at which the vehicle passes s (clamped to [0, 1]) of piece i: the exact integral of
+  // 1 / sdot from the start of the profile.
+  double TimeAtS(int piece, double s) const;
 
   struct Point {
     int piece = 0;
-    double s = 0.0;      // in [0, 1] on the piece
-    double sdot = 0.0;   // ds/dt
-    double sddot = 0.0;  // d2s/dt2 (constant on the cell)
+    double s = 0.0;       // in [0, 1] on the piece
+    double sdot = 0.0;    // ds/dt, 1/s
+    double sddot = 0.0;   // d2s/dt2, 1/s^2 (constant on a linear cell)
+    double sdddot = 0.0;  // d3s/dt3, 1/s^3 (0 on a linear cell)
   };
   // The state of the parameter at time t, clamped to [0, total_time()].
   Point AtTime(double t) const;
+  // The state at s (clamped to [0, 1]) of piece i, straight from the cell's b(s) without inverting
+  // time. A grid point belongs to the cell that starts there (s = 1: the last cell's end).
+  Point AtS(int piece, double s) const;
 
  private:
+  // Cell index and sigma = s - s_k for s in [0, 1] on a piece.
+  void Locate(int piece, double s, int* k, double* sigma) const;
+  // Time from the start of cell k of piece i to sigma in [0, ds] inside it.
+  double TimeInCell(int piece, int k, double sigma) const;
+  // The state at sigma in [0, ds] of cell k of piece i.
+  Point StateInCell(int piece, int k, double sigma) const;
+
   std::vector<std::vector<double>> b_;
   int cells_per_piece_ = 0;
   std::vector<double> cell_start_;  // m K + 1 cumulative times, cell_start_[c] = start of cell c
+  // Jerk-limited profiles only (empty otherwise): the 2K + 1 half-grid values and K shapes.
+  std::vector<std::vector<double>> half_b_;
+  std::vector<std::vector<CellShape>> shapes_;
+  std::vector<std::vector<double>> edges_;  // per piece K + 1 cell edges; empty: uniform
 };
 
 }  // namespace timeopt

@@ -1,8 +1,10 @@
 #pragma once
 
 // A time-parameterized trajectory p(t) = f(s(t)): the spatial curve composed with the temporal
-// profile. Within a cell sdot is linear in t and sdddot = 0, so
-//   v = f' sdot,   acc = f'' sdot^2 + f' sddot,   jerk = f''' sdot^3 + 3 f'' sdot sddot.
+// profile. By the chain rule
+//   v = f' sdot,   acc = f'' sdot^2 + f' sddot,   jerk = f''' sdot^3 + 3 f'' sdot sddot + f' sdddot,
+// where sdddot = 0 on the linear cells of a constructor-made profile and not on the cells of a
+// jerk-limited one (see temporal_profile.h).
 
 #include <vector>
 

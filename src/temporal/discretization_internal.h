@@ -1,0 +1,173 @@
+#pragma once
+
+// Library-internal pieces of the temporal discretization, shared by Discretize (the paper's and the
+// certified rows, discretization.cpp) and DiscretizeJerkLimited (jerk_discretization.cpp): small
+// polynomials and their Bernstein coefficients, the row builder that folds fixed grid values into
+// the bounds, and the stages both discretizations run.
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "timeopt/temporal/discretization.h"
+
+namespace timeopt::internal {
+
+inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
+
+// Relative slack for checking rows made only of constants (fixed grid values): rounding in
+// |v|^2 / |f'|^2 and back is ~1e-15; 1e-9 keeps "exactly at the limit" feasible.
+inline constexpr double kConstantRowSlack = 1e-9;
+
+inline double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// Small polynomials (ascending coefficients) on the stack: certified mode multiplies at most two
+// derivatives of a piece, so 2 * degree + 2 coefficients suffice (pieces of degree <= 30).
+inline constexpr int kMaxSmallPoly = 64;
+using SmallPoly = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxSmallPoly, 1>;
+
+// Coefficients (ascending, in u in [0, 1]) of p(s0 + h u) for the polynomial with ascending
+// coefficients `c` in s: a Taylor shift by repeated synthetic division, then the scaling by h^j.
+inline SmallPoly Shifted(const SmallPoly& c, double s0, double h) {
+  const int n = static_cast<int>(c.size());
+  SmallPoly out = c;
+  for (int i = 0; i + 1 < n; ++i) {
+    for (int j = n - 2; j >= i; --j) out(j) += s0 * out(j + 1);
+  }
+  double hj = 1.0;
+  for (int j = 0; j < n; ++j) {
+    out(j) *= hj;
+    hj *= h;
+  }
+  return out;
+}
+
+inline SmallPoly Multiply(const SmallPoly& a, const SmallPoly& b) {
+  SmallPoly out = SmallPoly::Zero(a.size() + b.size() - 1);
+  for (int i = 0; i < a.size(); ++i) {
+    for (int j = 0; j < b.size(); ++j) out(i + j) += a(i) * b(j);
+  }
+  return out;
+}
+
+inline SmallPoly Padded(const SmallPoly& a, int size) {
+  SmallPoly out = SmallPoly::Zero(std::max<int>(size, static_cast<int>(a.size())));
+  out.head(a.size()) = a;
+  return out;
+}
+
+// Power-to-Bernstein conversion matrices by size, computed once per Discretize call:
+// p_k = sum_{j <= k} C(k, j) / C(n, j) a_j.
+class BernsteinTable {
+ public:
+  SmallPoly Convert(const SmallPoly& a) {
+    const int size = static_cast<int>(a.size());
+    if (size >= static_cast<int>(matrices_.size())) matrices_.resize(size + 1);
+    Eigen::MatrixXd& T = matrices_[size];
+    if (T.size() == 0) {
+      T = Eigen::MatrixXd::Zero(size, size);
+      for (int k = 0; k < size; ++k) {
+        for (int j = 0; j <= k; ++j) T(k, j) = BinomialRatio(k, j, size - 1);
+      }
+    }
+    SmallPoly p = SmallPoly::Zero(size);
+    for (int k = 0; k < size; ++k) {
+      double sum = 0.0;
+      for (int j = 0; j <= k; ++j) sum += T(k, j) * a(j);
+      p(k) = sum;
+    }
+    return p;
+  }
+
+ private:
+  // C(k, j) / C(n, j) as a product of ratios (no overflow for large n).
+  static double BinomialRatio(int k, int j, int n) {
+    double r = 1.0;
+    for (int i = 0; i < j; ++i) r *= static_cast<double>(k - i) / static_cast<double>(n - i);
+    return r;
+  }
+  std::vector<Eigen::MatrixXd> matrices_;
+};
+
+class RowBuilder {
+ public:
+  explicit RowBuilder(TemporalDiscretization& d) : d_(d) {}
+
+  // Adds coef * b_g to the current row.
+  void Add(int g, double coef) {
+    const GridValue& v = d_.grid[static_cast<size_t>(g)];
+    if (v.var < 0) {
+      constant_ += coef * v.fixed;
+      return;
+    }
+    for (auto& t : terms_) {
+      if (t.first == v.var) {
+        t.second += coef * v.scale;
+        return;
+      }
+    }
+    terms_.emplace_back(v.var, coef * v.scale);
+  }
+
+  // Finishes the row lower <= expression <= upper; what() names it for presolve messages (called
+  // only when a constant row is found infeasible, so that building rows allocates no strings).
+  template <typename What>
+  void Finish(LinearRow::Kind kind, double lower, double upper, const What& what) {
+    std::vector<std::pair<int, double>> kept;
+    for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
+    if (kept.empty()) {
+      // Scale the slack by the finite bounds only (an infinite one would disable the check).
+      double scale = 1.0;
+      if (std::isfinite(lower)) scale = std::max(scale, std::abs(lower));
+      if (std::isfinite(upper)) scale = std::max(scale, std::abs(upper));
+      if ((std::isfinite(lower) && constant_ < lower - kConstantRowSlack * scale) ||
+          (std::isfinite(upper) && constant_ > upper + kConstantRowSlack * scale)) {
+        if (!d_.infeasible_reason) {
+          std::ostringstream ss;
+          ss << what() << " is " << constant_ << ", outside [" << lower << ", " << upper
+             << "] whatever the time allocation";
+          d_.infeasible_reason = ss.str();
+        }
+      }
+    } else {
+      LinearRow row;
+      row.kind = kind;
+      row.terms = std::move(kept);
+      row.lower = lower - constant_;
+      row.upper = upper - constant_;
+      d_.rows.push_back(std::move(row));
+    }
+    terms_.clear();
+    constant_ = 0.0;
+  }
+
+ private:
+  TemporalDiscretization& d_;
+  std::vector<std::pair<int, double>> terms_;
+  double constant_ = 0.0;
+};
+
+// Boundary grid value from a given velocity and the tangent there; a free value gets `scale`.
+GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
+                        const TemporalProblem& p, const std::string& field, double scale,
+                        int* next_var);
+// The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
+void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
+// One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
+// f'(k ds) at every grid point.
+std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
+                                              TemporalDiscretization* out);
+// The cells (problem.cells_per_piece per piece), and the verdict on a piece of one cell that must
+// start and end at rest.
+void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
+// Keeps, per variable, only the tightest row that bounds it alone, as its upper bound.
+void KeepTightestUpperBounds(TemporalDiscretization* d);
+
+}  // namespace timeopt::internal

@@ -1,0 +1,386 @@
+// Jerk-limited temporal profiles (quadratic and rest cells) against truths written here
+// independently: cell times by tanh-sinh quadrature of 1 / sqrt(b) and the rest cells' closed form
+// 3 ds / sqrt(b), the time map by its inverse, the derivatives of s(t) by finite differences, and
+// the trajectory's jerk by finite differences of its acceleration.
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include "timeopt/curve/piecewise_curve.h"
+#include "timeopt/curve/polynomial_piece.h"
+#include "timeopt/trajectory/temporal_profile.h"
+#include "timeopt/trajectory/trajectory.h"
+
+namespace timeopt {
+namespace {
+
+using Grid = std::vector<std::vector<double>>;
+using Shapes = std::vector<std::vector<CellShape>>;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kPi = 3.141592653589793238462643383279502884;
+
+// Integral over [0, ds] of f(x, ds - x) by tanh-sinh quadrature: x = ds / (1 + exp(-pi sinh u)),
+// whose distances to both ends are formed without cancellation, so integrands singular like
+// x^(-1/2) or x^(-2/3) at an end are integrated to full accuracy. The nodes stop at |u| = 4.5,
+// where x / ds < e^(-140); the tail left out is below 1e-20 of the integral for those
+// singularities. `step` is the node spacing in u.
+template <typename F>
+double TanhSinh(F f, double ds, double step) {
+  // Kahan summation: the ~1150 terms would otherwise add ~eps sqrt(N) of rounding.
+  double sum = 0.0, carry = 0.0;
+  const int n = static_cast<int>(std::lround(4.5 / step));
+  for (int j = -n; j <= n; ++j) {
+    const double u = j * step;
+    const double v = 0.5 * kPi * std::sinh(u);
+    const double x = ds / (1.0 + std::exp(-2.0 * v)), rest = ds / (1.0 + std::exp(2.0 * v));
+    if (!(x > 0.0) || !(rest > 0.0)) continue;
+    const double weight = ds * 0.5 * kPi * std::cosh(u) / (2.0 * std::cosh(v) * std::cosh(v));
+    const double term = weight * f(x, rest) - carry;
+    const double next = sum + term;
+    carry = (next - sum) - term;
+    sum = next;
+  }
+  return step * sum;
+}
+
+// The cell time of b quadratic through (b0, bm, b1) at 0, ds / 2, ds, by quadrature of
+// 1 / sqrt(b). b is expanded about the nearer end (with the distance to that end exact), so that
+// where b vanishes at an end it keeps its relative accuracy. Two spacings are compared: the
+// quadrature must agree between them to 1e-15 relative (rounding of the sum, a few eps) before it
+// is used as the truth.
+double QuadratureTime(double b0, double bm, double b1, double ds) {
+  const double c2 = 2.0 * (b0 - 2.0 * bm + b1) / (ds * ds);
+  const double c1 = (-3.0 * b0 + 4.0 * bm - b1) / ds;
+  const double d1 = (b0 - 4.0 * bm + 3.0 * b1) / ds;
+  auto f = [&](double x, double rest) {
+    const double b = x <= rest ? b0 + x * (c1 + c2 * x) : b1 - rest * (d1 - c2 * rest);
+    return 1.0 / std::sqrt(b);
+  };
+  const double coarse = TanhSinh(f, ds, 1.0 / 64), fine = TanhSinh(f, ds, 1.0 / 128);
+  EXPECT_NEAR(coarse, fine, 1e-15 * fine) << "quadrature not converged";
+  return fine;
+}
+
+// One piece of K cells, each given as (b0, bm, b1) and a shape, chained: b1 of one cell is b0 of
+// the next.
+TemporalProfile OnePiece(const std::vector<double>& half, const std::vector<CellShape>& shapes) {
+  return TemporalProfile::JerkLimited(Grid{half}, Shapes{shapes});
+}
+
+// The profile of the continuity tests: K = 4 cells on each of two pieces, rest start, two
+// quadratic cells, rest end. Between the rest cells b is one quadratic q(s) = 1 + alpha (s - ds)
+// + gamma (s - ds)^2 with alpha = 4 / (3 ds) (the slope b' = 2 sddot that the rest-start cell ends
+// with, sddot = b / (1.5 ds)) and gamma = -2 / (3 ds^2), the value for which q'(3 ds) =
+// -4 q(3 ds) / (3 ds), the slope the rest-end cell starts with. So sddot is continuous everywhere:
+// q = 1, 1.5, 5/3, 1.5, 1 at s = 1/4 .. 3/4. The rest cells' middle values (0.0 here) are
+// replaced by the constructor.
+TemporalProfile SmoothRestToRest() {
+  const std::vector<double> half = {0.0, 0.0, 1.0, 1.5, 5.0 / 3.0, 1.5, 1.0, 0.0, 0.0};
+  const std::vector<CellShape> shapes = {CellShape::kRestStart, CellShape::kQuadratic,
+                                         CellShape::kQuadratic, CellShape::kRestEnd};
+  return TemporalProfile::JerkLimited(Grid{half, half}, Shapes{shapes, shapes});
+}
+
+TEST(JerkProfile, QuadraticCellTimesMatchQuadrature) {
+  const double ds = 0.5;  // K = 2 cells: the cell and its mirror
+  // (b0, bm, b1): concave and convex; c2 within 1e-13 of 0 on both sides and exactly 0 (the
+  // closed forms' cancellation-prone limit); a minimum and a maximum inside; b = 0 at the start,
+  // at the end, at both ends; steep braking; constant.
+  const std::vector<std::array<double, 3>> cells = {
+      {1.0, 1.3, 2.0},  {1.0, 1.6, 2.0},      {1.0, 1.5 + 1e-13, 2.0}, {1.0, 1.5 - 1e-13, 2.0},
+      {1.0, 1.5, 2.0},  {2.0, 0.5, 1.5},      {0.5, 2.0, 1.0},         {0.0, 0.3, 1.0},
+      {0.0, 0.6, 1.0},  {1.0, 0.3, 0.0},      {0.0, 1.0, 0.0},         {4.0, 1.0, 0.01},
+      {3.0, 3.0, 3.0},  {1e-6, 0.5, 1.0},     {1.0, 0.26, 0.1},        {0.2, 0.2 + 1e-9, 0.2}};
+  for (const auto& c : cells) {
+    const TemporalProfile profile = OnePiece({c[0], c[1], c[2], c[1], c[0]},
+                                             {CellShape::kQuadratic, CellShape::kQuadratic});
+    const double truth = QuadratureTime(c[0], c[1], c[2], ds);
+    // The closed forms are a dozen operations on terms of one sign (a few eps), the quadrature a
+    // sum of ~1150 positive terms (~eps sqrt(N)): 1e-14 relative covers both; a form with
+    // cancellation loses ~1e-3 at c2 ~ 1e-12.
+    const std::string label = std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
+                              std::to_string(c[2]);
+    EXPECT_NEAR(profile.TimeAt(0, 1), truth, 1e-14 * truth) << label;
+    // The mirror cell takes the same time.
+    EXPECT_NEAR(profile.total_time() - profile.TimeAt(0, 1), truth, 1e-14 * truth) << label;
+  }
+  // b = 4 bm (sigma / ds)(1 - sigma / ds) from rest to rest: the integral is pi ds / (2 sqrt(bm)).
+  // Here K = 1, so ds = 1.
+  EXPECT_NEAR(OnePiece({0.0, 1.0, 0.0}, {CellShape::kQuadratic}).total_time(), kPi / 2.0,
+              4 * kEps);
+}
+
+TEST(JerkProfile, RestCellTimesMatchClosedFormAndQuadrature) {
+  const double ds = 0.5;  // K = 2 cells
+  for (double b_far : {1e-4, 0.3, 1.0, 7.5}) {
+    const TemporalProfile profile = OnePiece({0.0, 0.0, b_far, 0.0, 0.0},
+                                             {CellShape::kRestStart, CellShape::kRestEnd});
+    // b = b_far (sigma / ds)^(4/3): 1 / sqrt(b) ~ sigma^(-2/3) at the start, within tanh-sinh's
+    // reach. Written with the distance to the singular end for the rest-end mirror.
+    auto rest = [&](double x, double) { return 1.0 / std::sqrt(b_far * std::pow(x / ds, 4.0 / 3.0)); };
+    const double quadrature = TanhSinh(rest, ds, 1.0 / 128);
+    const double closed = 3.0 * ds / std::sqrt(b_far);
+    // Closed form against itself: the same three operations, a few eps.
+    EXPECT_NEAR(profile.TimeAt(0, 1), closed, 4 * kEps * closed) << b_far;
+    EXPECT_NEAR(profile.total_time(), 2.0 * closed, 8 * kEps * closed) << b_far;
+    // The quadrature of a x^(-2/3) singularity converges more slowly: 1e-13 relative.
+    EXPECT_NEAR(profile.TimeAt(0, 1), quadrature, 1e-13 * closed) << b_far;
+    // The middle value is the one the shape implies.
+    EXPECT_NEAR(profile.half_b(0, 1), std::pow(0.5, 4.0 / 3.0) * b_far, 4 * kEps * b_far);
+    EXPECT_EQ(profile.shape(0, 0), CellShape::kRestStart);
+    EXPECT_EQ(profile.shape(0, 1), CellShape::kRestEnd);
+  }
+}
+
+// A mixed profile of every jerk-limited shape over two pieces (b0 = 0 quadratic start included).
+TemporalProfile Mixed() {
+  return TemporalProfile::JerkLimited(
+      Grid{{0.0, 0.0, 0.8, 1.5, 2.0, 0.5, 1.5, 1.1, 0.0}, {0.0, 0.3, 1.0, 0.2, 0.05, 0.5, 2.0, 0.0, 0.0}},
+      Shapes{{CellShape::kRestStart, CellShape::kQuadratic, CellShape::kQuadratic,
+              CellShape::kQuadratic},
+             {CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic,
+              CellShape::kRestEnd}});
+}
+
+TEST(JerkProfile, AtTimeInvertsTimeAtS) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+    const double T = profile.total_time();
+    int checked = 0;
+    for (int i = 0; i < profile.num_pieces(); ++i) {
+      for (int j = 0; j <= 400; ++j) {
+        const double s = j / 400.0;
+        const double t = profile.TimeAtS(i, s);
+        const TemporalProfile::Point p = profile.AtTime(t);
+        // t carries the rounding of a sum of cell times (~eps T) and the inversion a few ulps of
+        // the cell time: s is off by sdot times that plus the rounding of s itself, bounded by
+        // 16 eps (1 + sdot T).
+        const double tolerance = 16 * kEps * (1.0 + p.sdot * T);
+        // A grid point shared by two pieces is reached at one time; AtTime names the later piece.
+        if (p.piece != i) {
+          EXPECT_TRUE((s == 1.0 && p.piece == i + 1 && p.s < tolerance) ||
+                      (s == 0.0 && p.piece == i - 1 && p.s > 1.0 - tolerance))
+              << "piece " << i << " s " << s;
+          continue;
+        }
+        EXPECT_NEAR(p.s, s, tolerance) << "piece " << i << " s " << s;
+        // The state at s is the state at its time.
+        const TemporalProfile::Point q = profile.AtS(i, s);
+        // sdot moves with s by sddot / sdot, or like sigma^(2/3) near a rest start (b ~
+        // sigma^(4/3)): an s error of 1e-13 moves it by at most ~(1e-13)^(2/3) ~ 2e-9.
+        EXPECT_NEAR(p.sdot, q.sdot, 1e-8) << "piece " << i << " s " << s;
+        ++checked;
+      }
+      // Grid times agree with the integral of 1 / sdot up to each grid point.
+      for (int k = 0; k <= profile.cells_per_piece(); ++k) {
+        EXPECT_NEAR(profile.TimeAtS(i, k * profile.ds()), profile.TimeAt(i, k), 4 * kEps * T);
+      }
+    }
+    EXPECT_GE(checked, 790);
+  }
+}
+
+// Central differences of g at t with step h, and an estimate of their truncation error from the
+// difference to step 2 h (Richardson: D(h) - D(2h) ~ 3 * error of D(h)).
+template <typename G>
+std::pair<double, double> CentralDifference(G g, double t, double h) {
+  const double d1 = (g(t + h) - g(t - h)) / (2.0 * h);
+  const double d2 = (g(t + 2.0 * h) - g(t - 2.0 * h)) / (4.0 * h);
+  return {d1, std::abs(d1 - d2) / 3.0};
+}
+
+TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+    const int K = profile.cells_per_piece();
+    int checked = 0;
+    for (int i = 0; i < profile.num_pieces(); ++i) {
+      for (int k = 0; k < K; ++k) {
+        const double t0 = profile.TimeAt(i, k);
+        const double t1 = k + 1 < K ? profile.TimeAt(i, k + 1) : profile.piece_durations()[i] +
+                                                                     profile.TimeAt(i, 0);
+        // A step of 1e-4 of the cell keeps t +- 2h inside it. Each value is accurate to a few ulps
+        // of its size V (s ~ 1, the rest below ~10): rounding adds ~8 eps V / h to the
+        // difference; truncation is estimated by Richardson and allowed twice over, plus 1e-9 for
+        // the estimate's own error (h^4 terms).
+        const double h = 1e-4 * (t1 - t0);
+        for (double fraction : {0.05, 0.3, 0.5, 0.77, 0.95}) {
+          const double t = t0 + fraction * (t1 - t0);
+          const TemporalProfile::Point p = profile.AtTime(t);
+          const double rounding = 8 * kEps * 10.0 / h;
+          const auto ds_dt = CentralDifference([&](double x) {
+            const TemporalProfile::Point q = profile.AtTime(x);
+            return q.piece * 1.0 + q.s;  // continuous across the piece joint
+          }, t, h);
+          const auto dsdot = CentralDifference([&](double x) { return profile.AtTime(x).sdot; }, t, h);
+          const auto dsddot = CentralDifference([&](double x) { return profile.AtTime(x).sddot; }, t, h);
+          const std::string label = "piece " + std::to_string(i) + " cell " + std::to_string(k) +
+                                    " at " + std::to_string(fraction);
+          EXPECT_NEAR(p.sdot, ds_dt.first, 2 * ds_dt.second + rounding + 1e-9) << label;
+          EXPECT_NEAR(p.sddot, dsdot.first, 2 * dsdot.second + rounding + 1e-9) << label;
+          EXPECT_NEAR(p.sdddot, dsddot.first, 2 * dsddot.second + rounding + 1e-9) << label;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_EQ(checked, 40);
+  }
+}
+
+TEST(JerkProfile, SddotIsContinuousAndRestEndsAreAtRest) {
+  const TemporalProfile profile = SmoothRestToRest();
+  const double T = profile.total_time();
+  // Rest start: sigma = J t^3 / 6, so exactly zero speed and acceleration at t = 0.
+  const TemporalProfile::Point start = profile.AtTime(0.0);
+  EXPECT_EQ(start.sdot, 0.0);
+  EXPECT_EQ(start.sddot, 0.0);
+  EXPECT_GT(start.sdddot, 0.0);
+  // Rest end at T: the time left is the rounding of T (~eps T), and sdot ~ J r^2, sddot ~ J r.
+  const TemporalProfile::Point end = profile.AtTime(T);
+  EXPECT_EQ(end.piece, 1);
+  EXPECT_NEAR(end.s, 1.0, 1e-15);
+  EXPECT_NEAR(end.sdot, 0.0, 1e-15);
+  EXPECT_NEAR(end.sddot, 0.0, 1e-13);
+  EXPECT_GT(end.sdddot, 0.0);  // braking eases off: the jerk is positive
+  // Just inside the rest-end cell sddot is negative (braking).
+  EXPECT_LT(profile.AtTime(T - 1e-3).sddot, 0.0);
+  // Across every grid time, sdot and sddot change only by their rate over 2 delta (delta = 1e-9
+  // s): |sddot| <= 6 and |sdddot| <= 60 here, so 1e-7 bounds both jumps with a wide margin over
+  // rounding; a jump of sddot between a rest cell and a quadratic one would be of order 1.
+  const double delta = 1e-9;
+  for (int i = 0; i < 2; ++i) {
+    for (int k = (i == 0 ? 1 : 0); k <= 4; ++k) {
+      if (i == 1 && k == 4) continue;
+      const double t = profile.TimeAt(i, k);
+      const TemporalProfile::Point before = profile.AtTime(t - delta), after = profile.AtTime(t + delta);
+      EXPECT_NEAR(before.sdot, after.sdot, 1e-7) << "piece " << i << " point " << k;
+      EXPECT_NEAR(before.sddot, after.sddot, 1e-7) << "piece " << i << " point " << k;
+    }
+  }
+}
+
+// A cubic piece with all of f', f'', f''' nonzero.
+PolynomialPiece Cubic(double scale) {
+  PolynomialPiece::Coefficients c(3, 4);
+  c << 0.0, 2.0, -1.0, 0.5 * scale,  //
+      1.0, 0.5, 1.5, -0.7 * scale,   //
+      -0.5, 1.0, 0.0, 0.3 * scale;
+  return PolynomialPiece(c);
+}
+
+PolynomialPiece Straight(double length) {
+  PolynomialPiece::Coefficients c = PolynomialPiece::Coefficients::Zero(3, 2);
+  c(0, 1) = length;
+  return PolynomialPiece(c);
+}
+
+TEST(JerkProfile, TrajectoryJerkMatchesFiniteDifferencesOfAcceleration) {
+  const double L = 3.0;
+  const Trajectory line(PiecewiseCurve({Straight(L), Straight(L)}), Mixed());
+  const Trajectory curved(PiecewiseCurve({Cubic(1.0), Cubic(-2.0)}), Mixed());
+  const TemporalProfile& profile = line.profile();
+  int checked = 0;
+  for (int i = 0; i < 2; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      const double t0 = profile.TimeAt(i, k);
+      const double t1 = k < 3 ? profile.TimeAt(i, k + 1) : profile.TimeAt(i, 0) + profile.piece_durations()[i];
+      const double h = 1e-4 * (t1 - t0);
+      for (double fraction : {0.1, 0.5, 0.9}) {
+        const double t = t0 + fraction * (t1 - t0);
+        // On the line f' = (L, 0, 0), f'' = f''' = 0: acceleration L sddot and jerk L sdddot.
+        const TemporalProfile::Point p = profile.AtTime(t);
+        const TrajectoryState x = line.Evaluate(t);
+        EXPECT_NEAR(x.acceleration.x(), L * p.sddot, 4 * kEps * L * std::abs(p.sddot));
+        EXPECT_NEAR(x.jerk.x(), L * p.sdddot, 4 * kEps * L * std::abs(p.sdddot));
+        EXPECT_EQ(x.jerk.y(), 0.0);
+        // Jerk against differences of the acceleration, per axis, tolerance as in the profile
+        // test: Richardson estimate twice over, rounding 8 eps V / h for |a| ~ V <= 100, 1e-8.
+        for (const Trajectory* trajectory : {&line, &curved}) {
+          const TrajectoryState y = trajectory->Evaluate(t);
+          for (int axis = 0; axis < 3; ++axis) {
+            const auto d = CentralDifference(
+                [&](double s) { return trajectory->Evaluate(s).acceleration(axis); }, t, h);
+            EXPECT_NEAR(y.jerk(axis), d.first, 2 * d.second + 8 * kEps * 100.0 / h + 1e-8)
+                << "piece " << i << " cell " << k << " axis " << axis;
+            const auto v = CentralDifference(
+                [&](double s) { return trajectory->Evaluate(s).velocity(axis); }, t, h);
+            EXPECT_NEAR(y.acceleration(axis), v.first, 2 * v.second + 8 * kEps * 100.0 / h + 1e-8)
+                << "piece " << i << " cell " << k << " axis " << axis;
+          }
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 48);
+}
+
+TEST(JerkProfile, LinearProfilesReportLinearCells) {
+  const TemporalProfile profile(Grid{{0.0, 0.36, 1.44, 1.0}});
+  EXPECT_FALSE(profile.jerk_limited());
+  EXPECT_TRUE(SmoothRestToRest().jerk_limited());
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(profile.shape(0, k), CellShape::kLinear);
+    // Midpoint of a linear b, exactly as documented.
+    EXPECT_EQ(profile.half_b(0, 2 * k + 1), 0.5 * (profile.b(0, k) + profile.b(0, k + 1)));
+    const double t = 0.5 * (profile.TimeAt(0, k) + profile.TimeAt(0, k + 1));
+    EXPECT_EQ(profile.AtTime(t).sdddot, 0.0);
+    // TimeAtS at a grid point is the grid time (the same sum), within its rounding.
+    EXPECT_NEAR(profile.TimeAtS(0, k / 3.0), profile.TimeAt(0, k), 4 * kEps * profile.total_time());
+  }
+  for (CellShape shape : kCellShapes) {
+    CellShape back = CellShape::kLinear;
+    EXPECT_TRUE(FromString(ToString(shape), &back));
+    EXPECT_EQ(back, shape);
+  }
+}
+
+// Expects JerkLimited to throw with a message containing `needle` (the piece and cell it names).
+void ExpectRejected(const Grid& half, const Shapes& shapes, const std::string& needle) {
+  try {
+    TemporalProfile::JerkLimited(half, shapes);
+    ADD_FAILURE() << "accepted; expected an error naming '" << needle << "'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
+TEST(JerkProfile, InvalidProfilesAreRejected) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  using S = CellShape;
+  const std::vector<S> two = {S::kQuadratic, S::kQuadratic};
+  ExpectRejected(Grid{}, Shapes{}, "at least 1 piece");
+  ExpectRejected(Grid{{1, 1, 1}}, Shapes{}, "shapes for 1 pieces, got 0");
+  ExpectRejected(Grid{{1, 1, 1, 1}}, Shapes{{S::kQuadratic}}, "2K + 1");
+  ExpectRejected(Grid{{1}}, Shapes{{}}, "2K + 1");
+  ExpectRejected(Grid{{1, 1, 1, 1, 1}, {1, 1, 1}}, Shapes{two, two}, "piece 1 has 3 half-grid");
+  ExpectRejected(Grid{{1, 1, 1, 1, 1}}, Shapes{{S::kQuadratic}}, "piece 0 has 1 cell shapes");
+  ExpectRejected(Grid{{1, 1, 1, -1e-9, 1}}, Shapes{two}, "half point 3 (cell 1)");
+  ExpectRejected(Grid{{1, nan, 1, 1, 1}}, Shapes{two}, "half point 1 (cell 0)");
+  ExpectRejected(Grid{{1, 1, 1, 1, inf}}, Shapes{two}, "half point 4 (cell 1)");
+  ExpectRejected(Grid{{1, 1, 1}}, Shapes{{S::kLinear}}, "cell 0 of piece 0 is linear");
+  // b = 0 at the start with zero slope: b ~ c2 sigma^2, 1 / sqrt(b) ~ 1 / sigma, infinite time.
+  ExpectRejected(Grid{{1, 1, 1, 1, 1}, {0.0, 0.25, 1.0, 1, 1}}, Shapes{two, two},
+                 "cell 0 of piece 1: b = sdot^2 reaches 0 with zero slope");
+  // ... and at the end.
+  ExpectRejected(Grid{{1, 0.25, 0.0}}, Shapes{{S::kQuadratic}}, "cell 0 of piece 0: b = sdot^2 reaches 0");
+  // b touching 0 inside (a double root at the middle): 1 / |sigma - ds/2|, infinite.
+  ExpectRejected(Grid{{1, 1, 1, 0.0, 1}}, Shapes{two}, "cell 1 of piece 0: b = sdot^2 reaches 0");
+  // Three positive values with b dipping below 0 between them.
+  ExpectRejected(Grid{{1, 0.05, 0.2}}, Shapes{{S::kQuadratic}}, "cell 0 of piece 0: the quadratic b = sdot^2 drops below 0");
+  // Rest cells: a far end at rest, or a near end not at rest.
+  ExpectRejected(Grid{{0, 0, 0, 0.5, 1}}, Shapes{{S::kRestStart, S::kQuadratic}}, "cell 0 of piece 0 starts at rest");
+  ExpectRejected(Grid{{0.1, 0.3, 1, 1, 1}}, Shapes{{S::kRestStart, S::kQuadratic}}, "cell 0 of piece 0 starts at rest");
+  ExpectRejected(Grid{{1, 1, 1, 0.5, 0.2}}, Shapes{{S::kQuadratic, S::kRestEnd}}, "cell 1 of piece 0 ends at rest");
+  ExpectRejected(Grid{{1, 0.5, 0, 0, 0}}, Shapes{{S::kQuadratic, S::kRestEnd}}, "cell 1 of piece 0 ends at rest");
+}
+
+}  // namespace
+}  // namespace timeopt
