@@ -17,6 +17,6 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DTIMEOPT_BUILD_TESTS=OFF \
 cmake --build build -j"$(nproc)" --target timeopt_cli
 mkdir -p results
 ./build/timeopt plan
-./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 \
+./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 --max-jerk 10 \
   --max-acceleration 2 -K 50 --constraint-mode certified --out-dir results/waypoints
 echo "results: $(pwd)/results (plan.csv, plan.png, waypoints/)"

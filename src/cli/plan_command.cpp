@@ -121,13 +121,14 @@ int RunPlan(PlanArgs args) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
     // The trajectory flown by the default jerk-input quadrotor from a hover (see `timeopt simulate`).
     try {
-      const FeasibilityReport flight = QuadrotorSim().Fly(trajectory, options.limits,
+      const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(trajectory, options.limits,
                                                           Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
       summary["flight"] = {{"feasible", flight.feasible},
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},
                            {"max_position_error", flight.max_position_error}};
-      if (!flight.feasible) summary["flight"]["note"] = kFlightNote;
+      if (options.limits.max_jerk) summary["flight"]["tolerance"] = kJerkLimitedFlightTolerance;
+      if (!flight.feasible && !options.limits.max_jerk) summary["flight"]["note"] = kFlightNote;
     } catch (const std::invalid_argument& e) {
       summary["flight"] = {{"error", e.what()}};
     }

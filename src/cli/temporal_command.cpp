@@ -135,7 +135,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   const Trajectory trajectory(problem.curve, result.profile);
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
   WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
-  const QuadrotorSim sim;
+  const QuadrotorSim sim = SummaryQuadrotor(problem.limits);
   std::ostringstream flown;
   try {
     const FeasibilityReport flight = sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity,
@@ -143,8 +143,9 @@ int RunWaypoints(const WaypointsArgs& args) {
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
           << ", max |a|/amax " << flight.max_acceleration_ratio << " ("
-          << (flight.feasible ? "limits hold" : "limits exceeded") << "; see `timeopt simulate`)";
-    if (!flight.feasible) flown << "\n  note: " << kFlightNote;
+          << (flight.feasible ? "limits hold" : "limits exceeded")
+          << (problem.limits.max_jerk ? " within 1%" : "") << "; see `timeopt simulate`)";
+    if (!flight.feasible && !problem.limits.max_jerk) flown << "\n  note: " << kFlightNote;
   } catch (const std::invalid_argument& e) {
     flown << "not flown in simulation: " << e.what();
   }

@@ -1,0 +1,222 @@
+// The jerk-limited temporal stage (limits.max_jerk): closed-form S-curves, dense checks of the
+// flown quantities, the sequential convex programme, both backends, the simulator, bad input.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "../common/fixtures.h"
+#include "../common/run_cli.h"
+#include "timeopt/core/files.h"
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/sim/quadrotor_sim.h"
+#include "timeopt/temporal/temporal_solver.h"
+#include "timeopt/trajectory/trajectory.h"
+
+namespace timeopt {
+namespace {
+
+using ::testing::HasSubstr;
+using test_support::Segment;
+
+// Rest-to-rest time along a line of length L with speed, acceleration and jerk limits v, a, j
+// (the S-curve): each half accelerates to a peak speed vp and the rest cruises. Accelerating to
+// vp takes vp / a + a / j and covers vp (vp / a + a / j) / 2 when vp >= a^2 / j (a is reached),
+// else 2 sqrt(vp / j) covering vp sqrt(vp / j).
+double SCurveTime(double L, double v, double a, double j) {
+  const auto accel_time = [&](double vp) { return vp >= a * a / j ? vp / a + a / j : 2.0 * std::sqrt(vp / j); };
+  const auto accel_distance = [&](double vp) { return 0.5 * vp * accel_time(vp); };
+  if (2.0 * accel_distance(v) <= L) return (L - 2.0 * accel_distance(v)) / v + 2.0 * accel_time(v);
+  // v is not reached: the peak speed where the two halves meet (accel_distance is increasing).
+  double lo = 0.0, hi = v;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (2.0 * accel_distance(mid) < L ? lo : hi) = mid;
+  }
+  return 2.0 * accel_time(0.5 * (lo + hi));
+}
+
+TemporalProblem JerkLine(const Eigen::Vector3d& to, double v, double a, double j, int K) {
+  TemporalProblem p;
+  p.curve = Segment(Eigen::Vector3d::Zero(), to);
+  p.limits.max_velocity.setConstant(v);
+  p.limits.max_acceleration.setConstant(a);
+  p.limits.max_jerk = Eigen::Vector3d::Constant(j);
+  p.cells_per_piece = K;
+  return p;
+}
+
+TEST(JerkLimited, SCurveClosedFormItself) {
+  // The issue's example: L = 10, v = 4, a = 3, j = 10 gives L / v + v / a + a / j.
+  EXPECT_NEAR(SCurveTime(10.0, 4.0, 3.0, 10.0), 10.0 / 4.0 + 4.0 / 3.0 + 0.3, 1e-12);
+  // No cruise, a reached: vp solves vp (vp / a + a / j) = L.
+  const double vp = 1.5 * (-0.3 + std::sqrt(0.09 + 4.0 * 2.0 / 3.0));
+  EXPECT_NEAR(SCurveTime(2.0, 4.0, 3.0, 10.0), 2.0 * (vp / 3.0 + 0.3), 1e-9);
+}
+
+// Lines along an axis, along a diagonal (the per-axis limits scale by the direction cosine: the
+// binding axis has |cos| = 1 / sqrt(3), so the line's limits are sqrt(3) times the axis ones),
+// and a short line where v is not reached. Targets: never below the closed form (that would be a
+// violated limit; 1e-9 for the solver's tolerance), within 1% above it at K = 50.
+TEST(JerkLimited, LinesAreWithinOnePercentOfTheSCurveAndNeverBelow) {
+  struct Case {
+    Eigen::Vector3d to;
+    double v, a, j, exact;
+  };
+  const double c = 1.0 / std::sqrt(3.0);
+  const Case cases[] = {
+      {Eigen::Vector3d(10.0, 0.0, 0.0), 4.0, 3.0, 10.0, SCurveTime(10.0, 4.0, 3.0, 10.0)},
+      {Eigen::Vector3d(10.0, 10.0, 10.0) * c, 4.0 * c, 3.0 * c, 10.0 * c,
+       SCurveTime(10.0, 4.0, 3.0, 10.0)},
+      {Eigen::Vector3d(0.0, 2.0, 0.0), 4.0, 3.0, 10.0, SCurveTime(2.0, 4.0, 3.0, 10.0)},
+  };
+  for (const TemporalBackend backend : {TemporalBackend::kSocp}) {
+    for (const Case& k : cases) {
+      const TemporalResult r = MakeTemporalSolver(backend)->Solve(JerkLine(k.to, k.v, k.a, k.j, 50));
+      ASSERT_TRUE(r.is_success()) << r.message;
+      EXPECT_GE(r.total_time, k.exact * (1.0 - 1e-9)) << k.to.transpose();
+      EXPECT_LE(r.total_time, k.exact * 1.01) << k.to.transpose();
+      EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
+    }
+  }
+}
+
+// Random cubic and quintic curves: the 1 kHz samples respect v, a and j (the dense check is
+// certified by the rows, so only the solver's tolerance is allowed: 1e-6), the jerk columns agree
+// with finite differences of the sampled acceleration, and the acceleration never jumps: between
+// two samples it changes by at most jmax dt (the jerk limit), across cells, joints and at the ends
+// (it starts and ends at 0 for these rest-to-rest problems).
+TEST(JerkLimited, DenseSamplesRespectEveryLimitAndAccelerationIsContinuous) {
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 4; ++trial) {
+    const Waypoints w = test_support::RandomWalk(rng, 4);
+    TemporalProblem p = test_support::WalkProblem(trial % 2 == 0 ? NaturalCubicSpline(w) : MinimumJerkSpline(w), 30);
+    p.limits.max_jerk = Eigen::Vector3d(6.0, 6.0, 4.0);
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+    ASSERT_TRUE(r.is_success()) << r.message;
+    const Trajectory trajectory(p.curve, r.profile);
+    const double rate = 1000.0, dt = 1.0 / rate;
+    const std::vector<TrajectoryState> samples = trajectory.Sample(rate);
+    EXPECT_LT(samples.front().acceleration.norm(), 1e-9);
+    EXPECT_LT(samples.back().acceleration.norm(), 1e-9);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const TrajectoryState& s = samples[i];
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_LE(std::abs(s.velocity(a)), p.limits.max_velocity(a) * (1.0 + 1e-6));
+        EXPECT_LE(std::abs(s.acceleration(a)), p.limits.max_acceleration(a) * (1.0 + 1e-6));
+        EXPECT_LE(std::abs(s.jerk(a)), (*p.limits.max_jerk)(a) * (1.0 + 1e-6));
+      }
+      if (i + 1 < samples.size()) {
+        const double h = samples[i + 1].t - s.t;
+        const Eigen::Vector3d change = samples[i + 1].acceleration - s.acceleration;
+        for (int a = 0; a < 3; ++a) {
+          // |change| <= jmax h: the mean of the jerk over the step is within the limit.
+          EXPECT_LE(std::abs(change(a)), (*p.limits.max_jerk)(a) * h * (1.0 + 1e-6) + 1e-12);
+        }
+        if (i > 0 && h > 0.5 * dt) {
+          // The central difference of the acceleration is the mean jerk over [t_{i-1}, t_{i+1}],
+          // which lies within the jerk's range there. The jerk may jump where two cells meet (its
+          // da/ds factor does), so the range is that of the three samples, widened by 1% of jmax
+          // for the jerk's smooth change between samples (at most 1e3 m/s^4 x 1 ms here).
+          const Eigen::Vector3d fd = (samples[i + 1].acceleration - samples[i - 1].acceleration) /
+                                     (samples[i + 1].t - samples[i - 1].t);
+          for (int a = 0; a < 3; ++a) {
+            const double lo = std::min({samples[i - 1].jerk(a), s.jerk(a), samples[i + 1].jerk(a)});
+            const double hi = std::max({samples[i - 1].jerk(a), s.jerk(a), samples[i + 1].jerk(a)});
+            const double slack = 0.01 * (*p.limits.max_jerk)(a);
+            EXPECT_GE(fd(a), lo - slack) << s.t;
+            EXPECT_LE(fd(a), hi + slack) << s.t;
+          }
+        }
+      }
+    }
+  }
+}
+
+// The sequential convex programme: every convex solve after the first is feasible for the true
+// jerk limit (each linearized row is conservative), and the reported T never increases with more
+// solves (the best jerk-feasible solve is kept).
+TEST(JerkLimited, EveryIterateIsJerkFeasibleAndTNeverIncreases) {
+  std::mt19937 rng(8);
+  TemporalProblem p = test_support::WalkProblem(NaturalCubicSpline(test_support::RandomWalk(rng, 4)), 30);
+  p.limits.max_jerk = Eigen::Vector3d(5.0, 5.0, 3.0);
+  double previous = std::numeric_limits<double>::infinity();
+  for (int n = 1; n <= 5; ++n) {
+    p.max_scp_iterations = n;
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+    ASSERT_TRUE(r.is_success()) << r.message;
+    EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6) << n;
+    EXPECT_LE(r.total_time, previous * (1.0 + 1e-12)) << n;
+    previous = r.total_time;
+    // The first solve has no jerk rows: its T is a lower bound of every later one.
+    ASSERT_GE(r.scp_history.size(), 2u);
+    for (size_t i = 1; i < r.scp_history.size(); ++i) EXPECT_GE(r.scp_history[i], r.scp_history[0] * (1.0 - 1e-9));
+  }
+}
+
+// Both backends run the same programme over the same convex subproblems, so their T agree to the
+// solvers' tolerances compounded over a few solves (0.2%).
+TEST(JerkLimited, BothBackendsAgree) {
+  const TemporalProblem p = JerkLine(Eigen::Vector3d(6.0, 3.0, 0.0), 3.0, 2.0, 8.0, 30);
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_TRUE(socp.is_success()) << socp.message;
+  ASSERT_TRUE(ipopt.is_success()) << ipopt.message;
+  EXPECT_NEAR(socp.total_time, ipopt.total_time, 2e-3 * socp.total_time);
+}
+
+// The jerk-input quadrotor flies these profiles from hover within 1% of the limits (its controller
+// holds the jerk feed-forward over each 1 ms step, so it lags the reference by a little).
+TEST(JerkLimited, TheSimulatedQuadrotorHoldsTheLimitsWithinOnePercent) {
+  std::mt19937 rng(12);
+  for (int trial = 0; trial < 2; ++trial) {
+    const Waypoints w = test_support::RandomWalk(rng, 4);
+    TemporalProblem p = test_support::WalkProblem(MinimumJerkSpline(w), 30);
+    p.limits.max_jerk = Eigen::Vector3d(6.0, 6.0, 4.0);
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+    ASSERT_TRUE(r.is_success()) << r.message;
+    const FeasibilityReport flight = QuadrotorSim().Fly(Trajectory(p.curve, r.profile), p.limits,
+                                                        Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    EXPECT_LE(flight.max_velocity_ratio, 1.01);
+    EXPECT_LE(flight.max_acceleration_ratio, 1.01);
+  }
+}
+
+TEST(JerkLimited, BadJerkLimitsAreInvalidInputAndUnreachableAccelerationsInfeasible) {
+  for (const double bad : {-1.0, 0.0, std::numeric_limits<double>::quiet_NaN()}) {
+    TemporalProblem p = JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 1.0, 5.0, 20);
+    (*p.limits.max_jerk)(1) = bad;
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput);
+    EXPECT_THAT(r.message, HasSubstr("limits.max_jerk[1]"));
+  }
+  // Starting at rest on a straight line with an acceleration across it: no sddot can make it.
+  TemporalProblem p = JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 1.0, 5.0, 20);
+  p.boundary.start_acceleration = Eigen::Vector3d(0.0, 0.5, 0.0);
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  EXPECT_EQ(r.status, TemporalStatus::kInfeasible);
+  EXPECT_THAT(r.message, HasSubstr("boundary.start_acceleration cannot be reached"));
+
+  // The command line: exit 2 for a negative limit, exit 3 for the unreachable acceleration.
+  const std::string dir = ::testing::TempDir();
+  WriteTextFile(dir + "/neg_jerk.json",
+                R"({"curve": {"pieces": [{"x": [0, 5], "y": [0, 0], "z": [0, 0]}]},
+                    "limits": {"max_velocity": 2, "max_acceleration": 1, "max_jerk": -3}})");
+  EXPECT_EQ(testing_support::RunCli("temporal " + dir + "/neg_jerk.json").exit_code, 2);
+  WriteTextFile(dir + "/across.json",
+                R"({"curve": {"pieces": [{"x": [0, 5], "y": [0, 0], "z": [0, 0]}]},
+                    "limits": {"max_velocity": 2, "max_acceleration": 1, "max_jerk": 5},
+                    "boundary": {"start_acceleration": [0, 0.5, 0]}})");
+  const testing_support::CliRun run = testing_support::RunCli("temporal " + dir + "/across.json");
+  EXPECT_EQ(run.exit_code, 3) << run.output;
+  EXPECT_THAT(run.output, HasSubstr("cannot be reached"));
+}
+
+}  // namespace
+}  // namespace timeopt
