@@ -76,6 +76,28 @@ BENCHMARK(BM_SocpCertified)->Apply(Grid);
 BENCHMARK(BM_Ipopt)->Apply(Grid);
 
 // rho > 0 (the one large rotated cone of eq. 50): m = 10, K = 50, rho = 0.1 * the third argument.
+// The jerk-limited mode (limits.max_jerk = 10 m/s^3, 5 x amax) on the same curves: every convex
+// solve of the sequential convex programme, in solver_ms and build_ms; compare with BM_Socp and
+// BM_SocpCertified at the same m and K. scp counts the convex solves.
+void BM_SocpJerkLimited(benchmark::State& state) {
+  TemporalProblem p = MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  p.limits.max_jerk = Eigen::Vector3d::Constant(10.0);
+  auto solver = MakeSocpTemporalSolver();
+  TemporalResult r;
+  for (auto _ : state) {
+    r = solver->Solve(p);
+    benchmark::ClobberMemory();
+  }
+  if (!r.is_success()) state.SkipWithError(r.message.c_str());
+  state.counters["duration_s"] = benchmark::Counter(r.total_time);
+  state.counters["iterations"] = r.iterations;
+  state.counters["scp"] = r.scp_iterations;
+  state.counters["solver_ms"] = r.solve_time_seconds * 1e3;
+  state.counters["build_ms"] = r.build_time_seconds * 1e3;
+  state.counters["max_jerk_ratio"] = r.max_jerk_ratio;
+}
+BENCHMARK(BM_SocpJerkLimited)->Args({10, 50})->Args({5, 30})->Unit(benchmark::kMillisecond);
+
 void BM_SocpRho(benchmark::State& s) {
   Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper, 0.1 * static_cast<double>(s.range(2)));
 }
