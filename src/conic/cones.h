@@ -62,6 +62,20 @@ inline void ApplyHCone(const double* w, double eta, const double* v, double* o, 
 // The cones of the internal problem and the Nesterov-Todd scaling of the current iterate. Orthant
 // rows [0, num_orthant) come first, then the second-order cones in `socs`. All vectors have the m
 // rows of s and z; the scaling is recomputed once per iteration by ComputeScaling.
+// The expanded form of a second-order cone's scaling in the KKT system: with w the NT scaling
+// vector (w0 = w[0]), W'W = eta^2 (D + u u' - v v'), D = diag(d0, 1, ..., 1), u = (u0, u1 w1),
+// v = (0, v1 w1), and d0 = 1 / (2 (2 w0^2 - 1)) so that D - v v' stays positive definite
+// (quasi-definiteness). Shared by both KKT methods.
+struct ExpandedCone {
+  double d0, u0, u1, v1;
+};
+inline ExpandedCone ExpandCone(double w0) {
+  const double t2 = 2.0 * w0 * w0 - 1.0;
+  const double d0 = 0.5 / t2;
+  const double u0 = std::sqrt(t2 - d0);
+  return {d0, u0, 2.0 * w0 / u0, std::sqrt(2.0 * (1.0 + d0)) / u0};
+}
+
 struct Cones {
   // ---- layout ----
   int num_rows = 0;     // m

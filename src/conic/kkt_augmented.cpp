@@ -238,14 +238,9 @@ void AugmentedKkt::UpdateScaling(double delta) {
         for (int j = i + 1; j < d; ++j) k_val[dense_slots[t++]] = -2.0 * e2 * w[i] * w[j];
       }
     } else {
-      // W'W = eta^2 (D + u u' - v v'), D = diag(d0, 1, ..., 1), u = (u0, u1 w1), v = (0, v1 w1), with
-      // d0 = 1 / (2 (2 w0^2 - 1)) so that D - v v' stays positive definite (quasi-definiteness).
-      const double w0 = w[0];
-      const double t2 = 2.0 * w0 * w0 - 1.0;
-      const double d0 = 0.5 / t2;
-      const double u0 = std::sqrt(t2 - d0);
-      const double u1 = 2.0 * w0 / u0;
-      const double v1 = std::sqrt(2.0 * (1.0 + d0)) / u0;
+      // W'W = eta^2 (D + u u' - v v') (see ExpandCone).
+      const ExpandedCone x = ExpandCone(w[0]);
+      const double d0 = x.d0, u0 = x.u0, u1 = x.u1, v1 = x.v1;
       const double et = eta[k];
       k_val[diag_slot[z0 + blk.start]] = -e2 * d0 - delta;
       k_val[u_slots[blk.slot_offset]] = et * u0;

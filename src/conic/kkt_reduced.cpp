@@ -386,12 +386,8 @@ int ReducedKkt::Factor(const SolverOptions& options) {
     const int var0 = cone_var_ptr[k];
     const int nv = cone_var_ptr[k + 1] - var0;
     if (blk.expanded) {
-      const double w0 = w[0];
-      const double t2 = 2.0 * w0 * w0 - 1.0;
-      const double d0 = 0.5 / t2;
-      const double u0 = std::sqrt(t2 - d0);
-      const double u1 = 2.0 * w0 / u0;
-      const double v1 = std::sqrt(2.0 * (1.0 + d0)) / u0;
+      const ExpandedCone x = ExpandCone(w[0]);
+      const double d0 = x.d0, u0 = x.u0, u1 = x.u1, v1 = x.v1;
       scalar_row(blk.start, inv_e2 * d0);
       for (int r = 1; r < d; ++r) scalar_row(blk.start + r, inv_e2);
       double* au = local_g.data();
