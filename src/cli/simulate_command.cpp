@@ -10,6 +10,7 @@
 #include <iostream>
 #include <stdexcept>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -37,6 +38,9 @@ struct SimulateArgs {
   double control_rate = 1.0 / QuadrotorSimOptions().time_step;
   double settle_time = QuadrotorSimOptions().settle_time;
   double max_jerk = 0.0;
+  // Relative slack of the verdict. Unset: rounding only (1e-9), or 1% for a problem with a jerk
+  // limit (the 1 kHz controller lags a continuous reference by a little).
+  std::optional<double> tolerance;
   std::string output;
   std::string states;
 };
@@ -63,7 +67,8 @@ int RunSimulate(const SimulateArgs& args) {
   options.settle_time = args.settle_time;
   if (args.max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   options.record_states = !args.states.empty();
-  const QuadrotorSim sim(options);  // invalid options throw before the solve
+  if (args.tolerance) options.limit_tolerance = *args.tolerance;
+  QuadrotorSim sim(options);  // invalid options throw before the solve
 
   nlohmann::ordered_json json;
   json["feasible"] = nullptr;  // first in the output; set below
@@ -91,6 +96,10 @@ int RunSimulate(const SimulateArgs& args) {
         std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
         return ExitCodeFor(result.status);
       }
+      if (!args.tolerance && problem.limits.max_jerk) {
+        options.limit_tolerance = kJerkLimitedFlightTolerance;
+        sim = QuadrotorSim(options);
+      }
       // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
       report = sim.Fly(Trajectory(problem.curve, result.profile), problem.limits,
                        problem.boundary.start_velocity, problem.boundary.start_acceleration);
@@ -107,6 +116,7 @@ int RunSimulate(const SimulateArgs& args) {
 
   const nlohmann::ordered_json flown = nlohmann::ordered_json::parse(FeasibilityReportToJson(report));
   for (const auto& item : flown.items()) json[item.key()] = item.value();
+  json["tolerance"] = sim.options().limit_tolerance;
   json["bandwidth"] = args.bandwidth;
   json["control_rate"] = args.control_rate;
   const std::string text = json.dump(2) + "\n";
@@ -149,6 +159,10 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
   sub->add_option("--max-jerk", args->max_jerk, "Vehicle jerk limit per axis, m/s^3 (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  sub->add_option("--tolerance", args->tolerance,
+                  "Relative slack of the verdict (default: rounding only, or 0.01 for a problem with "
+                  "limits.max_jerk)")
+      ->check(CLI::Range(0.0, 1.0));
   sub->add_option("-o,--output", args->output, "Report JSON file (default: stdout)");
   sub->add_option("--states", args->states,
                   "CSV of the vehicle's state at every controller step (t,x..z,vx..vz,ax..az,jx..jz,ex..ez)");

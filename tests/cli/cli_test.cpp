@@ -218,6 +218,22 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_THAT(json, HasSubstr("\"feasible\": true"));
   EXPECT_GT(JsonNumber(json, "total_time"), 7.0);
 
+  // With a jerk limit the acceleration is continuous: the vehicle follows within a fraction of a
+  // percent, and the verdict allows 1% by default for such problems (reported as "tolerance"); a
+  // strict verdict (--tolerance 0) still sees the controller's small lag (exit 1).
+  Write("jerk.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0, "max_jerk": 2.0},
+    "discretization": {"K": 50}})");
+  r = RunCli("simulate " + Path("jerk.json") + " -o " + Path("j.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  json = ReadTextFile(Path("j.json"));
+  EXPECT_EQ(JsonNumber(json, "tolerance"), 0.01);
+  EXPECT_LE(JsonNumber(json, "max_acceleration_ratio"), 1.01);
+  EXPECT_LE(JsonNumber(json, "max_velocity_ratio"), 1.01);
+  r = RunCli("simulate " + Path("jerk.json") + " --tolerance 0 -o " + Path("j0.json"));
+  EXPECT_EQ(JsonNumber(ReadTextFile(Path("j0.json")), "tolerance"), 0.0);
+  EXPECT_EQ(r.exit_code, JsonNumber(ReadTextFile(Path("j0.json")), "max_acceleration_ratio") > 1.0 ? 1 : 0);
+
   // The same line written as 1 kHz samples and flown from them, as another planner's output would be:
   // the same overshoot (the vehicle starts on the first sample, already at amax).
   r = RunCli("temporal " + line + " -o " + Path("t.json") + " --samples " + Path("line.csv") + " --rate 1000");
