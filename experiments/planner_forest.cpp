@@ -90,11 +90,16 @@ int main(int argc, char** argv) {
   app.add_option("--cells", base.temporal_cells_per_piece, "Temporal cells per piece K")
       ->capture_default_str();
   double vmax = 2.0, amax = 2.0;  // the `timeopt plan` defaults
+  double jmax = 0.0;  // the paper's evaluation: no jerk limit (the planner's default is 10 m/s^3)
   app.add_option("--max-velocity", vmax, "Per-axis velocity limit, m/s")->capture_default_str();
   app.add_option("--max-acceleration", amax, "Per-axis acceleration limit, m/s^2")->capture_default_str();
+  app.add_option("--max-jerk", jmax, "Per-axis jerk limit, m/s^3 (0: none, the paper's profile)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   base.limits.max_velocity.setConstant(vmax);
   base.limits.max_acceleration.setConstant(amax);
+  if (jmax > 0.0) base.limits.max_jerk = Eigen::Vector3d::Constant(jmax);
+  else base.limits.max_jerk.reset();
 
   const std::string dir = shared + "/maps/forest_gen";
   std::vector<Pair> pairs;
