@@ -97,7 +97,7 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   j["reduced_accuracy"] = r.reduced_accuracy;
   j["max_velocity_ratio"] = ok ? json(r.max_velocity_ratio) : json(nullptr);
   j["max_acceleration_ratio"] = ok ? json(r.max_acceleration_ratio) : json(nullptr);
-  if (r.scp_iterations > 0) {
+  if (r.jerk_limited) {
     // Jerk-limited results only (the paper's results keep their keys).
     j["max_jerk_ratio"] = ok ? json(r.max_jerk_ratio) : json(nullptr);
     j["scp_iterations"] = r.scp_iterations;

@@ -169,6 +169,16 @@ double TemporalDiscretization::Objective(const std::vector<double>& x, double* t
   return time + rho * reg;
 }
 
+double CubicRow::Value(const std::array<double, 3>& b) const {
+  double value = 0.0;
+  for (int j = 0; j < 3; ++j) {
+    for (int k = 0; k < 3; ++k) {
+      for (int l = 0; l < 3; ++l) value += coef[static_cast<size_t>(9 * j + 3 * k + l)] * b[j] * b[k] * b[l];
+    }
+  }
+  return value;
+}
+
 double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const {
   double worst = 0.0;
   for (size_t v = 0; v < var_upper.size(); ++v) {
@@ -180,6 +190,10 @@ double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const 
     for (const auto& t : r.terms) value += t.second * x[static_cast<size_t>(t.first)];
     if (std::isfinite(r.lower)) worst = std::max(worst, r.lower - value);
     if (std::isfinite(r.upper)) worst = std::max(worst, value - r.upper);
+  }
+  for (const CubicRow& r : cubic_rows) {
+    const std::array<double, 3> b = {GridB(r.grid[0], x), GridB(r.grid[1], x), GridB(r.grid[2], x)};
+    worst = std::max(worst, r.Value(b) - 1.0);
   }
   return worst;
 }

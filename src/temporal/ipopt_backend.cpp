@@ -64,6 +64,23 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
     }
     cells_.push_back(c);
   }
+  cubic_.reserve(d.cubic_rows.size());
+  for (const CubicRow& row : d.cubic_rows) {
+    CubicTerms c;
+    c.row = &row;
+    for (int j = 0; j < 3; ++j) {
+      const GridValue& g = d.grid[static_cast<size_t>(row.grid[static_cast<size_t>(j)])];
+      c.var[j] = g.var;
+      c.scale[j] = g.scale;
+      c.fixed[j] = g.fixed;
+    }
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        if (c.var[j] >= 0 && c.var[k] >= 0 && c.var[j] >= c.var[k]) keys.push_back(EntryKey(c.var[j], c.var[k]));
+      }
+    }
+    cubic_.push_back(c);
+  }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   hess_rows_.reserve(keys.size());
@@ -85,6 +102,31 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
     }
   }
   for (const LinearRow& r : d.rows) num_jacobian_entries_ += static_cast<int>(r.terms.size());
+  num_linear_jacobian_entries_ = num_jacobian_entries_;
+  for (CubicTerms& c : cubic_) {
+    for (int j = 0; j < 3; ++j) {
+      if (c.var[j] < 0) continue;
+      for (int k = 0; k < j; ++k) {
+        if (c.var[k] == c.var[j]) c.jac[j] = c.jac[k];
+      }
+      if (c.jac[j] < 0) c.jac[j] = num_jacobian_entries_++;
+      for (int k = 0; k < 3; ++k) {
+        if (c.var[k] >= 0 && c.var[j] >= c.var[k]) c.hess[j][k] = index_of(c.var[j], c.var[k]);
+      }
+    }
+  }
+}
+
+std::array<double, 3> IpoptTemporalNlp::CubicGradient(const CubicRow& r, const std::array<double, 3>& b) {
+  std::array<double, 3> g{};
+  for (int j = 0; j < 3; ++j) {
+    double sum = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      for (int l = 0; l < 3; ++l) sum += r.coef[static_cast<size_t>(9 * j + 3 * k + l)] * b[k] * b[l];
+    }
+    g[j] = 3.0 * sum;
+  }
+  return g;
 }
 
 std::vector<double> IpoptTemporalNlp::StartingPoint() const {
@@ -104,6 +146,11 @@ std::vector<double> IpoptTemporalNlp::StartingPoint() const {
     if (value > r.upper) t_max = std::min(t_max, r.upper / value);
     if (value < r.lower) t_max = std::min(t_max, r.lower / value);
   }
+  for (const CubicTerms& c : cubic_) {
+    if (c.var[0] < 0 || c.var[1] < 0 || c.var[2] < 0) continue;
+    const double value = c.row->Value(CubicB(c, x0.data()));
+    if (value > 1.0) t_max = std::min(t_max, std::cbrt(1.0 / value));
+  }
   for (double& v : x0) v *= 0.5 * t_max;
   return x0;
 }
@@ -111,7 +158,7 @@ std::vector<double> IpoptTemporalNlp::StartingPoint() const {
 bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) {
   n = d_.num_vars;
-  m = static_cast<Ipopt::Index>(d_.rows.size());
+  m = static_cast<Ipopt::Index>(d_.rows.size() + cubic_.size());
   nnz_jac_g = num_jacobian_entries_;
   nnz_h_lag = static_cast<Ipopt::Index>(hess_rows_.size());
   index_style = C_STYLE;
@@ -121,21 +168,27 @@ bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Ind
 bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u,
                                        Ipopt::Index m, Ipopt::Number* g_l,
                                        Ipopt::Number* g_u) {
-  if (n != d_.num_vars || m != static_cast<Ipopt::Index>(d_.rows.size())) return false;
+  const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
+  if (n != d_.num_vars || m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
   for (Ipopt::Index v = 0; v < n; ++v) {
     x_l[v] = 0.0;
     x_u[v] = IpoptBound(d_.var_upper[static_cast<size_t>(v)]);
   }
-  for (Ipopt::Index i = 0; i < m; ++i) {
+  for (Ipopt::Index i = 0; i < linear; ++i) {
     const LinearRow& r = d_.rows[static_cast<size_t>(i)];
     g_l[i] = IpoptBound(r.lower);
     g_u[i] = IpoptBound(r.upper);
+  }
+  for (Ipopt::Index i = linear; i < m; ++i) {
+    g_l[i] = -kIpoptInfinity;
+    g_u[i] = 1.0;
   }
   return true;
 }
 
 bool IpoptTemporalNlp::get_constraints_linearity(Ipopt::Index m, LinearityType* const_types) {
-  for (Ipopt::Index i = 0; i < m; ++i) const_types[i] = LINEAR;
+  const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
+  for (Ipopt::Index i = 0; i < m; ++i) const_types[i] = i < linear ? LINEAR : NON_LINEAR;
   return true;
 }
 
@@ -188,21 +241,43 @@ bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool 
 
 bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
                               Ipopt::Index m, Ipopt::Number* g) {
-  for (Ipopt::Index i = 0; i < m; ++i) {
+  const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
+  if (m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
+  for (Ipopt::Index i = 0; i < linear; ++i) {
     double value = 0.0;
     for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) value += t.second * x[t.first];
     g[i] = value;
   }
+  for (size_t r = 0; r < cubic_.size(); ++r) g[linear + static_cast<Ipopt::Index>(r)] = cubic_[r].row->Value(CubicB(cubic_[r], x));
   return true;
 }
 
-bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* /*x*/,
+bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* x,
                                   bool /*new_x*/, Ipopt::Index m, Ipopt::Index nele_jac,
                                   Ipopt::Index* iRow, Ipopt::Index* jCol,
                                   Ipopt::Number* values) {
-  if (nele_jac != num_jacobian_entries_) return false;
+  const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
+  if (nele_jac != num_jacobian_entries_ || m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
+  for (size_t r = 0; r < cubic_.size(); ++r) {
+    const CubicTerms& c = cubic_[r];
+    if (values == nullptr) {
+      for (int j = 0; j < 3; ++j) {
+        if (c.jac[j] < 0) continue;
+        iRow[c.jac[j]] = linear + static_cast<Ipopt::Index>(r);
+        jCol[c.jac[j]] = c.var[j];
+      }
+      continue;
+    }
+    for (int j = 0; j < 3; ++j) {
+      if (c.jac[j] >= 0) values[c.jac[j]] = 0.0;
+    }
+    const std::array<double, 3> grad = CubicGradient(*c.row, CubicB(c, x));
+    for (int j = 0; j < 3; ++j) {
+      if (c.jac[j] >= 0) values[c.jac[j]] += c.scale[j] * grad[static_cast<size_t>(j)];
+    }
+  }
   Ipopt::Index e = 0;
-  for (Ipopt::Index i = 0; i < m; ++i) {
+  for (Ipopt::Index i = 0; i < linear; ++i) {
     for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) {
       if (values == nullptr) {
         iRow[e] = i;
@@ -218,7 +293,7 @@ bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* /*x*/
 
 bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
                               Ipopt::Number obj_factor, Ipopt::Index /*m*/,
-                              const Ipopt::Number* /*lambda*/, bool /*new_lambda*/,
+                              const Ipopt::Number* lambda, bool /*new_lambda*/,
                               Ipopt::Index nele_hess, Ipopt::Index* iRow, Ipopt::Index* jCol,
                               Ipopt::Number* values) {
   if (nele_hess != static_cast<Ipopt::Index>(hess_rows_.size())) return false;
@@ -227,8 +302,23 @@ bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
     std::copy(hess_cols_.begin(), hess_cols_.end(), jCol);
     return true;
   }
-  // The rows are linear: the constraint multipliers do not enter.
+  // The linear rows' multipliers do not enter; the cubic rows' do.
   std::fill(values, values + nele_hess, 0.0);
+  const size_t linear = d_.rows.size();
+  for (size_t r = 0; r < cubic_.size(); ++r) {
+    const double weight = lambda[linear + r];
+    if (weight == 0.0) continue;
+    const CubicTerms& c = cubic_[r];
+    const std::array<double, 3> b = CubicB(c, x);
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        if (c.hess[j][k] < 0) continue;
+        double h = 0.0;
+        for (int l = 0; l < 3; ++l) h += c.row->coef[static_cast<size_t>(9 * j + 3 * k + l)] * b[static_cast<size_t>(l)];
+        values[c.hess[j][k]] += weight * 6.0 * h * c.scale[j] * c.scale[k];
+      }
+    }
+  }
   const double rho = d_.rho;
   for (const CellTerms& c : cells_) {
     const double b0 = std::max(B(c, 0, x), kMinDerivativeB);
@@ -324,10 +414,15 @@ class IpoptTemporalSolver final : public TemporalSolver {
 
   TemporalBackend backend() const override { return TemporalBackend::kIpopt; }
 
+ protected:
+  JerkRows jerk_rows() const override { return JerkRows::kExact; }
+
  private:
-  // Creates the application once; options never change for this solver.
-  bool EnsureApplication(std::string* error) {
-    if (Ipopt::IsValid(app_)) return true;
+  // Creates the application once per kind of rows (linear only, or with the exact jerk rows, whose
+  // Jacobian changes); options never change for this solver.
+  bool EnsureApplication(bool nonlinear_rows, std::string* error) {
+    Ipopt::SmartPtr<Ipopt::IpoptApplication>& slot = app_[nonlinear_rows ? 1 : 0];
+    if (Ipopt::IsValid(slot)) return true;
     // No console journal: the library never prints.
     Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(false);
     Ipopt::OptionsList& o = *app->Options();
@@ -351,9 +446,9 @@ class IpoptTemporalSolver final : public TemporalSolver {
     // Keep x >= 0 exactly (Ipopt relaxes bounds by 1e-8 by default): sqrt(b) stays defined at
     // every point Ipopt evaluates.
     ok &= o.SetNumericValue("bound_relax_factor", 0.0);
-    // Linear rows: their Jacobian is evaluated once.
+    // Linear rows: their Jacobian is evaluated once. The equalities are linear in every mode.
     ok &= o.SetStringValue("jac_c_constant", "yes");
-    ok &= o.SetStringValue("jac_d_constant", "yes");
+    ok &= o.SetStringValue("jac_d_constant", nonlinear_rows ? "no" : "yes");
     ok &= o.SetNumericValue("nlp_lower_bound_inf", -1e19);
     ok &= o.SetNumericValue("nlp_upper_bound_inf", 1e19);
     if (!ok) {
@@ -368,7 +463,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
       *error = std::string("Ipopt initialization failed: ") + ToString(init);
       return false;
     }
-    app_ = app;
+    slot = app;
     return true;
   }
 
@@ -378,7 +473,8 @@ class IpoptTemporalSolver final : public TemporalSolver {
     const Clock::time_point build_start = Clock::now();
     Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
     std::string error;
-    const bool ready = EnsureApplication(&error);
+    const bool nonlinear = !d.cubic_rows.empty();
+    const bool ready = EnsureApplication(nonlinear, &error);
     result->build_time_seconds += Seconds(build_start, Clock::now());
     if (!ready) {
       result->status = TemporalStatus::kNumericalError;
@@ -387,10 +483,11 @@ class IpoptTemporalSolver final : public TemporalSolver {
     }
 
     const Clock::time_point solve_start = Clock::now();
+    Ipopt::IpoptApplication& app = *app_[nonlinear ? 1 : 0];
     const Ipopt::ApplicationReturnStatus status =
-        app_->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(nlp)));
+        app.OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(nlp)));
     result->solve_time_seconds = Seconds(solve_start, Clock::now());
-    Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app_->Statistics();
+    Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app.Statistics();
     if (Ipopt::IsValid(stats)) result->iterations = stats->IterationCount();
 
     switch (status) {
@@ -404,10 +501,14 @@ class IpoptTemporalSolver final : public TemporalSolver {
         }
         return;
       case Ipopt::Infeasible_Problem_Detected:
-        // The rows and bounds are linear, so a point of local infeasibility is a global one.
+        // With linear rows and bounds a point of local infeasibility is a global one. The exact
+        // jerk rows are not convex, so there Ipopt's verdict is only local.
         result->status = TemporalStatus::kInfeasible;
-        result->message = "Ipopt: the limits cannot be met (converged to a point of local "
-                          "infeasibility of the linear rows)";
+        result->message = nonlinear ? "Ipopt: the limits cannot be met (converged to a point of local "
+                                      "infeasibility; the exact jerk rows are not convex, so this is a "
+                                      "local verdict)"
+                                    : "Ipopt: the limits cannot be met (converged to a point of local "
+                                      "infeasibility of the linear rows)";
         return;
       case Ipopt::Maximum_Iterations_Exceeded:
         result->status = TemporalStatus::kIterationLimit;
@@ -422,7 +523,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
   }
 
   IpoptTemporalOptions options_;
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app_;
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app_[2];  // linear rows only; with cubic rows
 };
 
 }  // namespace

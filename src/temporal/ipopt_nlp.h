@@ -12,12 +12,18 @@
 //   d2g/db0 db1 =  ds / (S^3 r0 r1)
 // (and the same with 0 <-> 1); of its regularization R = rho (b1 - b0)^2 / (4 ds):
 //   dR/db1 = -dR/db0 = rho (b1 - b0) / (2 ds),  d2R/db0^2 = d2R/db1^2 = -d2R/db0 db1 = rho / (2 ds).
-// Chain rule through b = scale * x. The rows are linear, so the Hessian of the Lagrangian is
-// obj_factor times the Hessian of J: each cell couples the variables of its two grid points
-// (lower triangle, duplicate (row, col) pairs merged into one entry).
+// Chain rule through b = scale * x. The linear rows do not enter the Hessian of the Lagrangian;
+// each cell couples the variables of its two grid points (lower triangle, duplicate (row, col)
+// pairs merged into one entry).
+//
+// Jerk-limited mode with exact rows (JerkRows::kExact) adds the cubic rows c(b) = sum S_jkl b_j b_k
+// b_l <= 1 (S fully symmetric) over a cell's three half-grid values, after the linear rows:
+//   dc/db_j = 3 sum_kl S_jkl b_k b_l,   d2c/db_j db_k = 6 sum_l S_jkl b_l,
+// and lambda times the latter in the Hessian, which then couples all three values of the cell.
 //
 // Only used by ipopt_backend.cpp and its test.
 
+#include <array>
 #include <vector>
 
 #include <IpTNLP.hpp>
@@ -49,8 +55,10 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
 
   // Starting point: x0_v = min(var_upper_v, cap) with cap the largest finite upper bound (1
   // without any), scaled by half of the largest t in (0, 1] such that every row with 0 inside
-  // its bounds holds at t x0. Rows are linear and hold at x = 0, so t x0 satisfies them for all
-  // t in [0, t_max]: the start is feasible for those rows and strictly inside the bounds.
+  // its bounds holds at t x0. Linear rows hold at x = 0, so t x0 satisfies them for all
+  // t in [0, t_max]: the start is feasible for those rows and strictly inside the bounds. Cubic
+  // rows whose values are all free scale as t^3 and are taken in the same way; the others are
+  // left to Ipopt, which does not need a feasible start.
   std::vector<double> StartingPoint() const;
 
   // ---- Ipopt::TNLP ----
@@ -99,8 +107,30 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
     return c.var[j] < 0 ? c.fixed[j] : c.scale[j] * x[c.var[j]];
   }
 
+  // One cubic row with its grid values resolved as in CellTerms. jac[j]: the Jacobian entry that
+  // value j's variable adds to (-1 when fixed; values on one variable share it). hess[j][k]: the
+  // Hessian entry the ordered pair adds to (-1 when a value is fixed or var[j] < var[k], so that
+  // each lower-triangle entry collects its pairs once).
+  struct CubicTerms {
+    const CubicRow* row = nullptr;
+    int var[3] = {-1, -1, -1};
+    double scale[3] = {1.0, 1.0, 1.0};
+    double fixed[3] = {0.0, 0.0, 0.0};
+    int jac[3] = {-1, -1, -1};
+    int hess[3][3] = {{-1, -1, -1}, {-1, -1, -1}, {-1, -1, -1}};
+  };
+  std::array<double, 3> CubicB(const CubicTerms& c, const Ipopt::Number* x) const {
+    std::array<double, 3> b{};
+    for (int j = 0; j < 3; ++j) b[j] = c.var[j] < 0 ? c.fixed[j] : c.scale[j] * x[c.var[j]];
+    return b;
+  }
+  // dc/db_j for the three values.
+  static std::array<double, 3> CubicGradient(const CubicRow& r, const std::array<double, 3>& b);
+
   const TemporalDiscretization& d_;
   std::vector<CellTerms> cells_;
+  std::vector<CubicTerms> cubic_;
+  int num_linear_jacobian_entries_ = 0;
   std::vector<int> hess_rows_, hess_cols_;
   int num_jacobian_entries_ = 0;
   std::vector<double> solution_;

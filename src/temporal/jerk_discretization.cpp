@@ -13,6 +13,8 @@
 //   |P(u)| + j b(u) / (2 bbar^1.5) <= 3 j / (2 sqrt(bbar)),   P = f' da/ds + 3 f'' a + f''' b,
 // implies |jerk| = sqrt(b) |P| <= j. Its Bernstein coefficients are linear rows again. bbar is the
 // largest b of the previous solution on the cell: the sequential convex programme's linearization.
+// The Ipopt backend instead writes the limit exactly, b P^2 <= j^2, as cubic rows in the cell's
+// three values (the Bernstein coefficients of that polynomial in u; see AddExactJerkRows).
 //
 // A cell that leaves rest (b = 0 and sddot = 0 at its start: a hover start, or after a stop) cannot
 // have sddot linear in s (the time would be infinite). It moves with constant s-jerk: b = b1 (u)^(4/3),
@@ -192,7 +194,52 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
   }
 }
 
-void AddQuadraticCellRows(JerkContext& c, int piece, int k, const std::vector<double>* lin) {
+// The exact jerk rows of a regular cell on axis a (JerkRows::kExact): |jerk| <= j is b P^2 <= j^2
+// on the whole cell, with P = sum_j b_j P_j(u) and b = sum_j b_j L_j(u). b P^2 is a polynomial in
+// u whose coefficients are cubic forms in the cell's three values; each of its Bernstein
+// coefficients <= j^2 makes one CubicRow (all of them together imply the limit on the cell).
+void AddExactJerkRows(JerkContext& c, int piece, int k, const SmallPoly (&jerk)[3], double jmax) {
+  const int g0 = c.Half(piece, 2 * k);
+  SmallPoly product[3][3][3];
+  int size = 0;
+  for (int j = 0; j < 3; ++j) {
+    for (int q = 0; q < 3; ++q) {
+      for (int l = q; l < 3; ++l) {
+        product[j][q][l] = Multiply(Multiply(Basis(j), jerk[q]), jerk[l]);
+        size = std::max(size, static_cast<int>(product[j][q][l].size()));
+      }
+    }
+  }
+  SmallPoly bern[3][3][3];
+  for (int j = 0; j < 3; ++j) {
+    for (int q = 0; q < 3; ++q) {
+      for (int l = q; l < 3; ++l) {
+        bern[j][q][l] = c.bernstein.Convert(Padded(product[j][q][l], size));
+        bern[j][l][q] = bern[j][q][l];
+      }
+    }
+  }
+  const double scale = 1.0 / (jmax * jmax);
+  for (int i = 0; i < size; ++i) {
+    CubicRow row;
+    bool positive = false;
+    for (int j = 0; j < 3; ++j) {
+      for (int q = 0; q < 3; ++q) {
+        for (int l = 0; l < 3; ++l) {
+          // The fully symmetric tensor of the same cubic form (the products are symmetric in q, l).
+          const double v = scale * (bern[j][q][l](i) + bern[q][j][l](i) + bern[l][j][q](i)) / 3.0;
+          row.coef[static_cast<size_t>(9 * j + 3 * q + l)] = v;
+          positive = positive || v > 0.0;
+        }
+      }
+    }
+    if (!positive) continue;  // holds for b >= 0
+    row.grid = {g0, g0 + 1, g0 + 2};
+    c.d.cubic_rows.push_back(row);
+  }
+}
+
+void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vector<double>* lin) {
   const int g0 = c.Half(piece, 2 * k);
   const TemporalLimits& limits = c.problem.limits;
   const double ds = c.Len(piece, k);
@@ -203,10 +250,6 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, const std::vector<do
   c.row.Add(g0 + 2, 0.5);
   c.row.Finish(LinearRow::Kind::kVelocity, -kInf, 0.0, [&] { return std::string("b >= 0"); });
 
-  double bbar = 0.0;
-  if (lin != nullptr) {
-    for (int j = 0; j < 3; ++j) bbar = std::max(bbar, (*lin)[static_cast<size_t>(g0 + j)]);
-  }
   for (int a = 0; a < 3; ++a) {
     const SmallPoly q = c.OnCell(piece, k, 1, a), p2 = c.OnCell(piece, k, 2, a);
     const SmallPoly p3 = c.OnCell(piece, k, 3, a);
@@ -266,7 +309,8 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, const std::vector<do
     emit(vel, 1.0, 0.0, vmax2, LinearRow::Kind::kVelocity);
     emit(acc, 1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
     emit(acc, -1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
-    if (lin != nullptr) {
+    if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, jmax);
+    if (mode == JerkRows::kLinearized) {
       // The jerk rows on kJerkSegments equal parts of the cell, each linearized at the previous
       // solution's largest b on that part. One part: on the S-curve line (v 4, a 3, j 10) four
       // parts gave the same T to 6 digits at K = 20..200, took 2-3 x longer and ended some
@@ -416,11 +460,16 @@ void StopWhereCurvatureJumps(const TemporalProblem& p, TemporalDiscretization* d
 
 }  // namespace
 
-TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem,
+TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, JerkRows jerk_rows,
                                              const std::vector<double>* linearization) {
   problem.Validate();
   if (!problem.limits.max_jerk) {
     throw std::invalid_argument("DiscretizeJerkLimited: limits.max_jerk is not set");
+  }
+  if ((jerk_rows == JerkRows::kLinearized) != (linearization != nullptr)) {
+    throw std::invalid_argument(jerk_rows == JerkRows::kLinearized
+                                    ? "DiscretizeJerkLimited: kLinearized needs a linearization"
+                                    : "DiscretizeJerkLimited: a linearization is only used by kLinearized");
   }
   const int m = problem.curve.num_pieces();
   const int K = problem.cells_per_piece;
@@ -496,7 +545,7 @@ TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) {
       if (d.shapes[static_cast<size_t>(i * K + k)] == CellShape::kQuadratic) {
-        AddQuadraticCellRows(c, i, k, linearization);
+        AddQuadraticCellRows(c, i, k, jerk_rows, linearization);
       } else {
         AddRestCellRows(c, i, k);
       }

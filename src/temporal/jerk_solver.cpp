@@ -11,6 +11,9 @@
 //    T (the previous solution is kept: T never increases over the reported answers), or after
 //    problem.max_scp_iterations jerk-feasible solves.
 // Every solve has the same sparsity pattern, so the conic solver reuses its symbolic analysis.
+//
+// A backend whose jerk_rows() is kExact (Ipopt) instead solves the discretization with the exact,
+// non-convex jerk rows once: a local optimum of the same grid, for comparison.
 
 #include <chrono>
 #include <cmath>
@@ -43,12 +46,12 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
 
   // One convex solve at `linearization` (null: the jerk-free first solve) into *out; false with
   // out's status and message set when it does not end optimal.
-  const auto solve = [&](const std::vector<double>* linearization, TemporalResult* out,
+  const auto solve = [&](JerkRows rows, const std::vector<double>* linearization, TemporalResult* out,
                          std::vector<double>* grid_b) {
     const Clock::time_point start = Clock::now();
     TemporalDiscretization d;
     try {
-      d = DiscretizeJerkLimited(problem, linearization);
+      d = DiscretizeJerkLimited(problem, rows, linearization);
     } catch (const std::invalid_argument& e) {
       out->status = TemporalStatus::kInvalidInput;
       out->message = e.what();
@@ -111,6 +114,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   };
   const auto finish = [&](TemporalResult r) {
     r.solver = name;
+    r.jerk_limited = true;
     r.build_time_seconds = build_time;
     r.solve_time_seconds = solve_time;
     r.iterations = iterations;
@@ -121,7 +125,11 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
 
   TemporalResult first;
   std::vector<double> linearization;
-  if (!solve(nullptr, &first, &linearization)) {
+  if (jerk_rows() == JerkRows::kExact) {
+    solve(JerkRows::kExact, nullptr, &first, &linearization);
+    return finish(first);
+  }
+  if (!solve(JerkRows::kNone, nullptr, &first, &linearization)) {
     if (first.status == TemporalStatus::kInfeasible && first.message.rfind("no time", 0) == 0) {
       first.message = "no profile with continuous acceleration meets the limits and the boundary "
                       "states (" + first.message + ")";
@@ -134,7 +142,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   for (int n = 0; n < problem.max_scp_iterations; ++n) {
     TemporalResult next;
     std::vector<double> next_b;
-    if (!solve(&linearization, &next, &next_b)) {
+    if (!solve(JerkRows::kLinearized, &linearization, &next, &next_b)) {
       if (have_best) {
         best.message = "stopped at convex solve " + std::to_string(history.size() + 1) + ": " +
                        ToString(next.status) + ": " + next.message;

@@ -42,6 +42,10 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
   if (d.num_vars == 0) {
     throw std::invalid_argument("no SOCP to build: every speed on the grid is fixed by the boundary");
   }
+  if (!d.cubic_rows.empty()) {
+    throw std::invalid_argument("no SOCP to build: the discretization has exact (non-convex) jerk rows; "
+                                "the SOCP takes their linearization (JerkRows::kLinearized)");
+  }
   conic::ProblemBuilder builder;
   const int nx = d.num_vars;
   const int x0 = builder.AddVariables(nx);

@@ -71,7 +71,8 @@ std::vector<double> Gradient(IpoptTemporalNlp& nlp, const std::vector<double>& x
 }
 
 // The dense symmetric Hessian of the Lagrangian from the NLP's lower triangle, with the given
-// objective factor and non-zero constraint multipliers (which must not matter: rows are linear).
+// objective factor and non-zero constraint multipliers (which must not matter: rows are linear;
+// the exact jerk rows, whose multipliers do, have their own test below).
 Eigen::MatrixXd DenseHessian(IpoptTemporalNlp& nlp, const std::vector<double>& x,
                              double obj_factor) {
   Ipopt::Index n = 0, m = 0, nnz_jac = 0, nnz_h = 0;
@@ -168,6 +169,79 @@ TEST(IpoptTemporalNlp, CellWithBothEndsOnOneVariable) {
   d.var_upper = {std::numeric_limits<double>::infinity(), 1.0};
   ExpectDerivativesMatchFiniteDifferences(d, {0.3, 0.7});
   ExpectDerivativesMatchFiniteDifferences(d, {0.05, 0.02});
+}
+
+// Jerk-limited mode with exact rows: the cubic rows' Jacobian (eval_jac_g) and their part of the
+// Hessian of the Lagrangian (eval_h with multipliers) against central differences of eval_g and
+// of obj_factor grad f + J^T lambda. Same steps and tolerance as above: the rows are cubic in
+// values ~0.1, so truncation is ~h^2 relative and any wrong term is O(1) relative.
+TEST(IpoptTemporalNlp, ExactJerkRowsMatchFiniteDifferences) {
+  std::mt19937 rng(5);
+  TemporalProblem problem = RandomG1Problem(rng, 3, 0.0);
+  problem.limits.max_jerk = Eigen::Vector3d(4.0, 5.0, 6.0);
+  // The start moves at sdot = 0.1 (start_velocity = 0.1 f'(0)), so its acceleration must have the
+  // curvature's part f'' sdot^2 across the path.
+  problem.boundary.start_acceleration = 0.01 * problem.curve.Evaluate(0, 0.0, 2);
+  const TemporalDiscretization d = DiscretizeJerkLimited(problem, JerkRows::kExact);
+  ASSERT_FALSE(d.infeasible_reason.has_value()) << *d.infeasible_reason;
+  ASSERT_FALSE(d.cubic_rows.empty());
+  EXPECT_GT(d.grid.front().fixed, 0.0);  // a fixed, non-zero value inside some cubic rows
+  IpoptTemporalNlp nlp(d);
+  Ipopt::Index n = 0, m = 0, nnz_jac = 0, nnz_h = 0;
+  Ipopt::TNLP::IndexStyleEnum style;
+  ASSERT_TRUE(nlp.get_nlp_info(n, m, nnz_jac, nnz_h, style));
+  ASSERT_EQ(m, static_cast<Ipopt::Index>(d.rows.size() + d.cubic_rows.size()));
+  std::uniform_real_distribution<double> u(0.02, 0.2);
+  std::vector<double> x(static_cast<size_t>(n));
+  for (double& v : x) v = u(rng);
+  std::vector<double> lambda(static_cast<size_t>(m));
+  for (double& l : lambda) l = u(rng);
+  const double obj_factor = 0.75;
+
+  std::vector<Ipopt::Index> jr(static_cast<size_t>(nnz_jac)), jc(static_cast<size_t>(nnz_jac));
+  ASSERT_TRUE(nlp.eval_jac_g(n, x.data(), true, m, nnz_jac, jr.data(), jc.data(), nullptr));
+  const auto jacobian = [&](const std::vector<double>& at) {
+    std::vector<double> values(static_cast<size_t>(nnz_jac));
+    EXPECT_TRUE(nlp.eval_jac_g(n, at.data(), true, m, nnz_jac, nullptr, nullptr, values.data()));
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(m, n);
+    for (size_t e = 0; e < values.size(); ++e) jac(jr[e], jc[e]) += values[e];
+    return jac;
+  };
+  const auto constraints = [&](const std::vector<double>& at) {
+    Eigen::VectorXd g(m);
+    EXPECT_TRUE(nlp.eval_g(n, at.data(), true, m, g.data()));
+    return g;
+  };
+  // The gradient of the Lagrangian obj_factor f + lambda . g.
+  const auto lagrangian_gradient = [&](const std::vector<double>& at) {
+    const std::vector<double> gf = Gradient(nlp, at);
+    Eigen::VectorXd grad = obj_factor * Eigen::Map<const Eigen::VectorXd>(gf.data(), n);
+    return Eigen::VectorXd(grad + jacobian(at).transpose() * Eigen::Map<const Eigen::VectorXd>(lambda.data(), m));
+  };
+  const Eigen::MatrixXd jac = jacobian(x);
+  Eigen::MatrixXd jac_fd(m, n), h_fd(n, n);
+  for (int v = 0; v < n; ++v) {
+    const double step = 1e-6 * std::max(1.0, std::abs(x[v]));
+    std::vector<double> xp = x, xm = x;
+    xp[v] += step;
+    xm[v] -= step;
+    jac_fd.col(v) = (constraints(xp) - constraints(xm)) / (2.0 * step);
+    h_fd.col(v) = (lagrangian_gradient(xp) - lagrangian_gradient(xm)) / (2.0 * step);
+  }
+  EXPECT_LT((jac - jac_fd).cwiseAbs().maxCoeff(), kFiniteDifferenceTolerance * jac_fd.cwiseAbs().maxCoeff());
+  std::vector<Ipopt::Index> hr(static_cast<size_t>(nnz_h)), hc(static_cast<size_t>(nnz_h));
+  std::vector<double> hv(static_cast<size_t>(nnz_h));
+  ASSERT_TRUE(nlp.eval_h(n, x.data(), true, obj_factor, m, nullptr, true, nnz_h, hr.data(), hc.data(), nullptr));
+  ASSERT_TRUE(nlp.eval_h(n, x.data(), true, obj_factor, m, lambda.data(), true, nnz_h, nullptr, nullptr, hv.data()));
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  std::set<std::pair<int, int>> seen;
+  for (size_t e = 0; e < hv.size(); ++e) {
+    EXPECT_GE(hr[e], hc[e]);
+    EXPECT_TRUE(seen.insert({hr[e], hc[e]}).second) << "duplicate entry " << e;
+    h(hr[e], hc[e]) = hv[e];
+    h(hc[e], hr[e]) = hv[e];
+  }
+  EXPECT_LT((h - h_fd).cwiseAbs().maxCoeff(), kFiniteDifferenceTolerance * h_fd.cwiseAbs().maxCoeff());
 }
 
 // The Jacobian is the rows' coefficients and eval_g is J x (exact for linear rows up to

@@ -160,15 +160,34 @@ TEST(JerkLimited, EveryIterateIsJerkFeasibleAndTNeverIncreases) {
   }
 }
 
-// Both backends run the same programme over the same convex subproblems, so their T agree to the
-// solvers' tolerances compounded over a few solves (0.2%).
-TEST(JerkLimited, BothBackendsAgree) {
-  const TemporalProblem p = JerkLine(Eigen::Vector3d(6.0, 3.0, 0.0), 3.0, 2.0, 8.0, 30);
-  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
-  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
-  ASSERT_TRUE(socp.is_success()) << socp.message;
-  ASSERT_TRUE(ipopt.is_success()) << ipopt.message;
-  EXPECT_NEAR(socp.total_time, ipopt.total_time, 2e-3 * socp.total_time);
+// The two backends solve the same grid with the jerk limit written two ways: the SOCP backend by
+// sequential convex programming over tangent bounds of 1 / sqrt(b), Ipopt once with the exact,
+// non-convex rows b P^2 <= j^2. Both are certified and both are local answers; the issue asks for
+// 0.2%. Ipopt's T is the lower one, by 0 (the line) to 1.6e-4 (the quintic): the SCP linearizes
+// 1 / sqrt(b) at the cell's largest b, so where the jerk binds at a smaller b of the same cell its
+// bound keeps some slack, which the exact rows do not. That is not the SCP stopping early: with
+// scp_tolerance 1e-9 it ends at the same T to 9 digits. Ipopt <= SCP is asserted with 1e-6 of
+// room for the solvers' tolerances. Both answers must hold the jerk limit on the dense check.
+TEST(JerkLimited, BothBackendsAgreeAndTheExactRowsAreNotAbove) {
+  std::mt19937 rng(21);
+  std::vector<TemporalProblem> problems = {JerkLine(Eigen::Vector3d(6.0, 3.0, 0.0), 3.0, 2.0, 8.0, 20)};
+  for (int trial = 0; trial < 2; ++trial) {
+    const Waypoints w = test_support::RandomWalk(rng, 3);
+    TemporalProblem p = test_support::WalkProblem(trial == 0 ? NaturalCubicSpline(w) : MinimumJerkSpline(w), 20);
+    p.limits.max_jerk = Eigen::Vector3d(6.0, 6.0, 4.0);
+    problems.push_back(p);
+  }
+  for (const TemporalProblem& p : problems) {
+    const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+    const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+    ASSERT_TRUE(socp.is_success()) << socp.message;
+    ASSERT_TRUE(ipopt.is_success()) << ipopt.message;
+    EXPECT_EQ(ipopt.scp_iterations, 0);  // one non-convex solve
+    EXPECT_LE(ipopt.max_jerk_ratio, 1.0 + 1e-6);
+    EXPECT_LE(socp.max_jerk_ratio, 1.0 + 1e-6);
+    EXPECT_NEAR(socp.total_time, ipopt.total_time, 2e-3 * socp.total_time);
+    EXPECT_LE(ipopt.total_time, socp.total_time * (1.0 + 1e-6));
+  }
 }
 
 // The jerk-input quadrotor flies these profiles from hover within 1% of the limits (its controller

@@ -72,6 +72,16 @@ struct LinearRow {
   double upper = std::numeric_limits<double>::infinity();
 };
 
+// Jerk-limited mode with exact jerk rows (DiscretizeJerkLimited with JerkRows::kExact, for the
+// Ipopt backend): a cubic form in the three half-grid values of one cell,
+//   sum over j, k, l in {0, 1, 2} of coef[9 j + 3 k + l] b_{grid[j]} b_{grid[k]} b_{grid[l]} <= 1,
+// with coef fully symmetric. Written over grid values (b_g, see GridValue), not over x.
+struct CubicRow {
+  std::array<int, 3> grid{};
+  std::array<double, 27> coef{};
+  double Value(const std::array<double, 3>& b) const;
+};
+
 struct Cell {
   int piece = 0;
   int first_grid = 0;  // grid index of b^k; b^{k+1} is first_grid + 1
@@ -96,6 +106,7 @@ struct TemporalDiscretization {
   std::vector<double> var_upper;           // upper bound of each x (>= 0, may be +inf); x >= 0
   std::vector<LinearRow> rows;             // over x, constants folded into the bounds
   std::vector<JointInfo> joints;           // m - 1 entries
+  std::vector<CubicRow> cubic_rows;        // JerkRows::kExact only; <= 1 each
   // Jerk-limited mode (DiscretizeJerkLimited): the grid is the half grid, cells_per_piece = 2 K
   // half cells; shapes holds the shape of each of the m K full cells in path order.
   bool jerk_limited = false;
@@ -111,20 +122,29 @@ struct TemporalDiscretization {
   double GridB(int g, const std::vector<double>& x) const;
   // Objective J and its time part T for x (infinite when a cell has b = 0 at both ends).
   double Objective(const std::vector<double>& x, double* total_time = nullptr) const;
-  // Largest violation of the rows and bounds for x (0 when feasible), in the rows' units.
+  // Largest violation of the rows (linear and cubic) and bounds for x (0 when feasible), in the
+  // rows' units.
   double MaxViolation(const std::vector<double>& x) const;
 };
 
 // Validates the problem (throws std::invalid_argument) and builds the discretization.
 TemporalDiscretization Discretize(const TemporalProblem& problem);
 
+// How DiscretizeJerkLimited writes the jerk limit |jerk| = sqrt(b) |P| <= j of regular cells.
+enum class JerkRows {
+  kNone,        // left out: the sequential convex programme's first, jerk-free solve
+  kLinearized,  // linear rows, 1 / sqrt(b) bounded by its tangent at a previous solution's b
+  kExact,       // cubic rows b P^2 <= j^2 (CubicRow): not convex, for the Ipopt backend
+};
+
 // The jerk-limited discretization (problem.limits.max_jerk set): b on the half grid of every cell,
 // b quadratic and sddot linear and continuous on regular cells, constant s-jerk on cells that
-// leave or reach rest, and velocity, acceleration and jerk rows certified on every whole cell. The
-// jerk rows are linearized at `linearization` (b at every half-grid point, m (2 K + 1) values, of a
-// previous solution): any solution of this convex problem satisfies the true jerk limit. Without a
-// linearization the jerk rows of regular cells are left out (the first, jerk-free solve).
-TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem,
-                                             const std::vector<double>* linearization);
+// leave or reach rest, and velocity, acceleration and jerk rows certified on every whole cell (by
+// the Bernstein coefficients of the cell's polynomials in s). The jerk rows of regular cells are
+// written as `jerk_rows` says; kLinearized needs `linearization` (b at every half-grid point,
+// m (2 K + 1) values, of a previous solution), and any solution of that convex problem satisfies
+// the true jerk limit. Rest cells' jerk bounds are exact and linear in every mode.
+TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, JerkRows jerk_rows,
+                                             const std::vector<double>* linearization = nullptr);
 
 }  // namespace timeopt

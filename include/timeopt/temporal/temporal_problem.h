@@ -94,7 +94,8 @@ struct TemporalProblem {
   // Jerk-limited mode (limits.max_jerk set): the jerk rows are not convex, so the SOCP backend
   // solves a sequence of convex problems, each conservative for the true jerk limit (sequential
   // convex programming). It stops when T changes by less than scp_tolerance relative, or after
-  // max_scp_iterations convex solves after the first (jerk-free) one. scp_tolerance in (0, 0.1],
+  // max_scp_iterations convex solves after the first (jerk-free) one. The Ipopt backend writes the
+  // jerk rows exactly and solves once (these two are not used). scp_tolerance in (0, 0.1],
   // max_scp_iterations in [1, 100].
   double scp_tolerance = 1e-4;
   int max_scp_iterations = 30;

@@ -62,6 +62,8 @@ struct TemporalResult {
   // Jerk-limited mode: the largest |jerk_axis| / max_jerk_axis on the same dense check (0
   // otherwise), the number of convex solves of the sequential convex programme (the first one
   // jerk-free), and T after each of them (the first one not jerk-feasible; each later one is).
+  // The Ipopt backend solves the exact, non-convex jerk rows once: scp_iterations 0, no history.
+  bool jerk_limited = false;  // the problem had limits.max_jerk (set whatever the status)
   double max_jerk_ratio = 0.0;
   int scp_iterations = 0;
   std::vector<double> scp_history;

@@ -34,9 +34,13 @@ class TemporalSolver {
   // std::invalid_argument for a problem the backend cannot represent (reported as kInvalidInput).
   virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
                                 std::vector<double>* x) = 0;
+  // How the backend takes the jerk limit (limits.max_jerk set): kLinearized, the sequential convex
+  // programme (the SOCP backend); kExact, one solve with the non-convex cubic rows (Ipopt).
+  virtual JerkRows jerk_rows() const { return JerkRows::kLinearized; }
 
  private:
-  // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited (jerk_solver.cpp).
+  // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited, or one solve
+  // of its exact rows (jerk_solver.cpp).
   TemporalResult SolveJerkLimited(const TemporalProblem& problem);
 };
 
