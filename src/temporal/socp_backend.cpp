@@ -152,6 +152,9 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
 
 namespace {
 
+// The relative gap tolerance of the jerk-limited mode's convex solves (see SocpTemporalOptions).
+constexpr double kJerkLimitedRelativeGap = 1e-7;
+
 class SocpTemporalSolver final : public TemporalSolver {
  public:
   explicit SocpTemporalSolver(const SocpTemporalOptions& options) : options_(options) {
@@ -165,6 +168,8 @@ class SocpTemporalSolver final : public TemporalSolver {
     // barely moves; the solver's default window away from the optimum (4 x stall_iterations = 20)
     // lets them reach the certificate, and near the optimum its short window applies.
     solver_ = conic::Solver(o);
+    o.relative_gap_tolerance = std::max(options.tolerance, kJerkLimitedRelativeGap);
+    jerk_solver_ = conic::Solver(o);
   }
 
   TemporalBackend backend() const override { return TemporalBackend::kSocp; }
@@ -176,7 +181,7 @@ class SocpTemporalSolver final : public TemporalSolver {
     const conic::Problem socp = BuildTemporalSocp(d);
     result->build_time_seconds += Seconds(start, Clock::now());
 
-    const conic::Result r = solver_.Solve(socp);
+    const conic::Result r = (d.jerk_limited ? jerk_solver_ : solver_).Solve(socp);
     result->iterations = r.iterations;
     result->solve_time_seconds = r.solve_time_seconds;
     switch (r.status) {
@@ -206,6 +211,7 @@ class SocpTemporalSolver final : public TemporalSolver {
  private:
   SocpTemporalOptions options_;
   conic::Solver solver_;
+  conic::Solver jerk_solver_;  // jerk-limited discretizations (see SocpTemporalOptions::tolerance)
 };
 
 }  // namespace
