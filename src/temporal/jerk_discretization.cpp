@@ -42,6 +42,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "discretization_internal.h"
 
 namespace timeopt {
@@ -68,6 +70,9 @@ const double kRestTimeWeight =
 constexpr double kNormalTolerance = 1e-6;
 // The jerk rows' smallest linearization point relative to the largest b (see bbar_floor).
 constexpr double kLinearizationFloor = 1e-4;
+// The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
+constexpr double kSmallestRestCell = 1.0 / 64.0;
+constexpr double kLargestRestCell = 0.25;
 // Parts of a cell with their own linearization of the jerk rows (see AddQuadraticCellRows).
 constexpr int kJerkSegments = 1;
 
@@ -413,30 +418,73 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
 // L = 3..6 up to +1.8% on the short line, and L = 6 stalled the conic solver at K = 200. The
 // remaining gap is in the ramp from rest, where sddot grows like s^(1/3) and one line per cell keeps
 // the jerk below its limit over most of each cell.
-std::vector<double> CellEdges(int K, bool refine_start, bool refine_end) {
-  const int levels =
-      std::min(std::max(1, static_cast<int>(std::lround(std::log2(256.0 / K)))), K / 4 - 1);
-  std::vector<double> sizes;  // in units of the nominal ds, before normalization
-  const auto graded = [&]() {
+// The part of piece i (in s) that a jerk-limited start from rest at its start (end = false) or a
+// stop at its end takes to build up its acceleration: along the tangent u at that point, the
+// limits are v = min_axis vmax / |u_axis| (and so on); the jerk-saturated ramp reaches
+// a_p = min(a, sqrt(v j)) after a_p^3 / (6 j^2) metres, which is |f'| times as much in s. On a
+// line this is exactly where the constant s-jerk of a rest cell ends. 0 when the tangent vanishes.
+double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_rest) {
+  const Eigen::Vector3d f1 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 1);
+  const double speed = f1.norm();
+  if (!(speed > p.zero_tangent_tolerance)) return 0.0;
+  double v = kInf, a = kInf, j = kInf;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double u = std::abs(f1(axis)) / speed;
+    if (u <= 1e-12) continue;
+    v = std::min(v, p.limits.max_velocity(axis) / u);
+    a = std::min(a, p.limits.max_acceleration(axis) / u);
+    j = std::min(j, (*p.limits.max_jerk)(axis) / u);
+  }
+  // A curved start cannot go faster than its curvature kappa allows: |f'' across| = kappa v^2 <= a.
+  const Eigen::Vector3d f2 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 2);
+  const double kappa = f1.cross(f2).norm() / (speed * speed * speed);
+  if (kappa > 0.0) v = std::min(v, std::sqrt(a / kappa));
+  double peak = std::min(a, std::sqrt(v * j));
+  if (rest_to_rest) {
+    // From rest to rest within the piece, a line of length P peaks at (P j^2 / 2)^(1/3) (jerk +j,
+    // -j, -j, +j over equal times) when neither a nor v is reached. P from |f'| at 16 midpoints.
+    double length = 0.0;
+    for (int k = 0; k < 16; ++k) length += p.curve.Evaluate(piece, (k + 0.5) / 16.0, 1).norm() / 16.0;
+    peak = std::min(peak, std::cbrt(0.5 * length * j * j));
+  }
+  const double length = peak * peak * peak / (6.0 * j * j);
+  return std::isfinite(length) ? length / speed : 0.0;
+}
+
+std::vector<double> CellEdges(int K, double rest_start, double rest_end) {
+  const double ds = 1.0 / K;
+  // The cells of one end, from the rest point on. A ramp of at least half a nominal cell gets one
+  // rest cell of its length (at most a quarter of the piece); a shorter one h, h, 2 h, ..., 2^(n-1) h
+  // with the last one widened so that they sum to ds.
+  const auto graded = [&](double h) {
     std::vector<double> g;
-    g.push_back(std::ldexp(1.0, -levels));
-    for (int j = levels; j >= 1; --j) g.push_back(std::ldexp(1.0, -j));
+    if (!(h > 0.0) || K < 4) return g;
+    if (h >= 0.5 * ds) {
+      g.push_back(std::min(h, kLargestRestCell));
+      return g;
+    }
+    h = std::max(h, kSmallestRestCell * ds);
+    const int n = std::min(static_cast<int>(std::floor(std::log2(ds / h))), K / 4 - 1);
+    if (n < 1) return g;
+    h = std::max(h, std::ldexp(ds, -n - 1));
+    g.push_back(h);
+    for (int j = 0; j < n; ++j) g.push_back(std::ldexp(h, j));
+    double sum = 0.0;
+    for (double c : g) sum += c;
+    g.back() += ds - sum;
     return g;
   };
-  std::vector<double> head, tail;
-  if (levels >= 1 && refine_start) head = graded();
-  if (levels >= 1 && refine_end) {
-    tail = graded();
-    std::reverse(tail.begin(), tail.end());
-  }
-  const int middle = K - static_cast<int>(head.size() + tail.size());
-  const double graded_length = (head.empty() ? 0.0 : 1.0) + (tail.empty() ? 0.0 : 1.0);  // nominal cells
-  const double ds = 1.0 / K;
-  const double middle_size = (1.0 - graded_length * ds) / middle;
+  std::vector<double> head = graded(rest_start), tail = graded(rest_end);
+  std::reverse(tail.begin(), tail.end());
+  double graded_length = 0.0;
+  for (double h : head) graded_length += h;
+  for (double h : tail) graded_length += h;
+  const int uniform = K - static_cast<int>(head.size() + tail.size());
+  const double middle_size = (1.0 - graded_length) / uniform;
   std::vector<double> edges(1, 0.0);
-  for (double h : head) edges.push_back(edges.back() + h * ds);
-  for (int k = 0; k < middle; ++k) edges.push_back(edges.back() + middle_size);
-  for (double h : tail) edges.push_back(edges.back() + h * ds);
+  for (double h : head) edges.push_back(edges.back() + h);
+  for (int k = 0; k < uniform; ++k) edges.push_back(edges.back() + middle_size);
+  for (double h : tail) edges.push_back(edges.back() + h);
   edges.back() = 1.0;
   return edges;
 }
@@ -525,9 +573,11 @@ TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, Jer
   // ---- graded cells; each half cell is half its cell ----
   d.cell_edges.resize(static_cast<size_t>(m));
   for (int i = 0; i < m; ++i) {
+    const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
+    const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
     d.cell_edges[static_cast<size_t>(i)] =
-        CellEdges(K, d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart,
-                  d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd);
+        CellEdges(K, rest_start ? RampLength(problem, i, false, rest_end) : 0.0,
+                  rest_end ? RampLength(problem, i, true, rest_start) : 0.0);
     for (int k = 0; k < K; ++k) {
       const double half = 0.5 * c.Len(i, k);
       d.cells[static_cast<size_t>(2 * (i * K + k))].ds = half;

@@ -39,15 +39,22 @@ double SecondsSince(Clock::time_point from) {
   return std::chrono::duration<double>(Clock::now() - from).count();
 }
 
-// Working sets. Of a convex solve's inequality rows (~60 per cell and axis-limit, the Bernstein
-// coefficients of every limit) only a few are near their bound at the answer, and successive
-// solves of the programme move little, so a solve after the first starts from the rows that reach
-// kWorkingSetFraction of their bound at the previous answer (measured on the benchmark's curves,
-// m = 10, K = 50: 17% of the rows reach 0.5 of their bound at the answer, 5.5% reach 0.99).
-// Equalities, two-sided rows and rows with a bound <= 0 are always in. An answer that violates a
-// row left out adds it (and the rows near their bound at that answer) and is solved again; after
-// kMaxWorkingSetRounds solves every row is in.
+// Working sets. Of a convex solve's inequality rows (~60 per cell, the Bernstein coefficients of
+// every limit on every axis) only a few are near their bound at the answer, and successive solves
+// of the programme move little, so a solve starts from the rows that reach a fraction of their
+// bound at the previous answer (measured on the benchmark's curves, m = 10, K = 50: 17% of the
+// rows reach 0.5 of their bound at the answer, 5.5% reach 0.99): kWorkingSetFraction when that
+// answer has settled, kUnsettledFraction when it still moved by more than kWorkingSetSettled, and
+// kGuessFraction for the first solve, whose "previous answer" is the certified guess. Equalities,
+// two-sided rows and rows with a bound <= 0 are always in. An answer that violates a row left out
+// adds it (with the rows of its cells, and those near their bound at that answer) and is solved
+// again; after kMaxWorkingSetRounds solves every row is in. Measured (BM_SocpJerkLimited
+// m = 10, K = 50; the shipped waypoints with j = 10; the forest plan, K = 20): 224 / 244 / ~450 ms
+// with every row, 90-100 / 145 / 363 ms with these fractions; 0.7 / 0.7 / 0.7 gave 90 / 175 /
+// 410 ms, with more re-solves and, before the point velocity bounds, failed solves.
 constexpr double kWorkingSetFraction = 0.7;
+constexpr double kUnsettledFraction = 0.3;
+constexpr double kGuessFraction = 0.5;
 constexpr int kMaxWorkingSetRounds = 3;
 constexpr double kWorkingSetSettled = 0.01;
 
@@ -86,12 +93,13 @@ bool AlwaysKept(const LinearRow& row) {
   return std::isfinite(row.lower) || !(row.upper > 0.0) || !std::isfinite(row.upper);
 }
 
-std::vector<char> WorkingSet(const TemporalDiscretization& d, const std::vector<double>& x, bool every_jerk_row) {
+std::vector<char> WorkingSet(const TemporalDiscretization& d, const std::vector<double>& x, bool every_jerk_row,
+                             double fraction) {
   std::vector<char> keep(d.rows.size(), 0);
   for (size_t r = 0; r < d.rows.size(); ++r) {
     const LinearRow& row = d.rows[r];
     keep[r] = AlwaysKept(row) || (every_jerk_row && row.kind == LinearRow::Kind::kJerk) ||
-              RowValue(row, x) >= kWorkingSetFraction * row.upper;
+              RowValue(row, x) >= fraction * row.upper;
   }
   return keep;
 }
@@ -119,7 +127,7 @@ int GrowWorkingSet(const std::vector<LinearRow>& rows, const std::vector<double>
   int added = 0;
   for (size_t r = 0; r < rows.size(); ++r) {
     if ((*keep)[r]) continue;
-    bool add = all || RowValue(rows[r], x) >= kWorkingSetFraction * rows[r].upper;
+    bool add = all || RowValue(rows[r], x) >= kUnsettledFraction * rows[r].upper;
     for (const auto& t : rows[r].terms) add = add || moved[static_cast<size_t>(t.first)];
     if (add) {
       (*keep)[r] = 1;
@@ -217,15 +225,17 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       guess = certified_guess(d);
       if (!guess.empty()) previous = &guess;
     }
-    // A later solve uses a working set only when the previous answer is nearly settled (its T
-    // within kWorkingSetSettled of the one before): an answer still moving far picks rows that do
-    // not bind at the next one, and the solver took 80-100 iterations on such sets (or gave up).
+    // How near its bound a row must be to enter the working set depends on how far the answer may
+    // still move: a previous answer whose T is within kWorkingSetSettled of the one before has
+    // nearly settled; one still moving far (and the certified guess) picks rows that may not bind
+    // at the next answer, and each row it misses costs a solve again.
     const size_t h = history.size();
     const bool settled = h < 2 || std::abs(history[h - 1] - history[h - 2]) <= kWorkingSetSettled * history[h - 1];
-    if (previous != nullptr && settled && static_cast<int>(previous->size()) == d.num_vars && d.num_vars > 0) {
+    if (previous != nullptr && static_cast<int>(previous->size()) == d.num_vars && d.num_vars > 0) {
       // The first linearized solve starts from the jerk-free answer, which says nothing of where
       // the jerk rows will bind: it takes all of them.
-      keep = WorkingSet(d, *previous, h == 1);
+      const double fraction = rows == JerkRows::kNone ? kGuessFraction : settled ? kWorkingSetFraction : kUnsettledFraction;
+      keep = WorkingSet(d, *previous, h == 1, fraction);
     }
     build_time += SecondsSince(start);
     std::vector<double>& x = *x_out;

@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -62,9 +64,11 @@ TEST(JerkLimited, SCurveClosedFormItself) {
 
 // Lines along an axis, along a diagonal (the per-axis limits scale by the direction cosine: the
 // binding axis has |cos| = 1 / sqrt(3), so the line's limits are sqrt(3) times the axis ones),
-// and a short line where v is not reached. Targets: never below the closed form (that would be a
-// violated limit; 1e-9 for the solver's tolerance), within 1% above it at K = 50.
-TEST(JerkLimited, LinesAreWithinOnePercentOfTheSCurveAndNeverBelow) {
+// a short line where v is not reached and a shorter one where a is not reached either. Targets
+// of the issue: never below the closed form (that would be a violated limit; 1e-9 for the
+// solver's tolerance), within 1% above it at K = 50 and within 0.25% at K = 200 (measured: at most
+// 0.03% and 0.006%, the rest cells sized to the jerk ramp).
+TEST(JerkLimited, LinesAreWithinTheTargetsOfTheSCurveAndNeverBelow) {
   struct Case {
     Eigen::Vector3d to;
     double v, a, j, exact;
@@ -75,14 +79,16 @@ TEST(JerkLimited, LinesAreWithinOnePercentOfTheSCurveAndNeverBelow) {
       {Eigen::Vector3d(10.0, 10.0, 10.0) * c, 4.0 * c, 3.0 * c, 10.0 * c,
        SCurveTime(10.0, 4.0, 3.0, 10.0)},
       {Eigen::Vector3d(0.0, 2.0, 0.0), 4.0, 3.0, 10.0, SCurveTime(2.0, 4.0, 3.0, 10.0)},
+      {Eigen::Vector3d(0.0, 0.0, 0.5), 4.0, 3.0, 10.0, SCurveTime(0.5, 4.0, 3.0, 10.0)},
   };
-  for (const TemporalBackend backend : {TemporalBackend::kSocp}) {
-    for (const Case& k : cases) {
-      const TemporalResult r = MakeTemporalSolver(backend)->Solve(JerkLine(k.to, k.v, k.a, k.j, 50));
+  for (const Case& k : cases) {
+    for (const auto& [K, target] : {std::pair<int, double>{50, 0.01}, std::pair<int, double>{200, 0.0025}}) {
+      const TemporalResult r = MakeSocpTemporalSolver()->Solve(JerkLine(k.to, k.v, k.a, k.j, K));
       ASSERT_TRUE(r.is_success()) << r.message;
-      EXPECT_GE(r.total_time, k.exact * (1.0 - 1e-9)) << k.to.transpose();
-      EXPECT_LE(r.total_time, k.exact * 1.01) << k.to.transpose();
+      EXPECT_GE(r.total_time, k.exact * (1.0 - 1e-9)) << k.to.transpose() << " K " << K;
+      EXPECT_LE(r.total_time, k.exact * (1.0 + target)) << k.to.transpose() << " K " << K;
       EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
+      std::printf("%g K %d: %+.4f%%\n", k.to.norm(), K, 100.0 * (r.total_time / k.exact - 1.0));
     }
   }
 }
