@@ -405,19 +405,15 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
   c.row.Finish(LinearRow::Kind::kBoundaryAcceleration, b, b, [&] { return field; });
 }
 
-// Cell edges of a piece in [0, 1]: K cells, graded geometrically towards an end that is a rest
-// point. There the vehicle moves with constant s-jerk over the whole first cell, which is far
-// slower than a jerk-limited start over a short stretch followed by the rest of the profile: on a
-// 10 m line (v 4, a 3, j 10) a uniform K = 50 grid ended 7.6% above the closed-form time. The
-// graded end replaces one nominal cell by L + 1 cells of ds / 2^L, ds / 2^L, ds / 2^(L-1), ...,
-// ds / 2 (summing to ds); the other cells share the rest of the piece evenly. L makes the rest cell
-// about 1/256 of the piece: L = round(log2(256 / K)), at least 1 and at most K / 4 - 1 (no grading
-// below K = 8). Measured against the closed form on that line and on a 2 m one (no cruise), at
-// K = 20 / 50 / 100 / 200: +0.30 / +0.39 / +0.38 / +0.07% and +1.18 / +0.77 / +0.58 / +0.78%, every
-// solve to full accuracy. A fixed L did worse somewhere: L = 2 gave +4.7% at K = 20 (long line),
-// L = 3..6 up to +1.8% on the short line, and L = 6 stalled the conic solver at K = 200. The
-// remaining gap is in the ramp from rest, where sddot grows like s^(1/3) and one line per cell keeps
-// the jerk below its limit over most of each cell.
+// Cell edges of a piece in [0, 1]: K cells, with a rest cell at an end that is a rest point sized
+// to the ramp from rest (RampLength): there the vehicle moves with constant s-jerk over the whole
+// cell, which is exactly the jerk-saturated start along a line, and sddot grows like s^(1/3), which
+// cells with sddot linear in s follow badly (one line per cell keeps the jerk below its limit over
+// most of the cell). Measured against the closed form on lines (v 4, a 3, j 10) of 10 m, 2 m (v not
+// reached) and 0.5 m (a not reached either), at K = 50 / 200: +0.012 / +0.0014%, +0.031 / +0.0058%
+// and +0.53 / +0.13%. The previous rule, a rest cell of ~1/256 of the piece whatever the limits
+// (graded by halving), gave +0.39 / +0.07% and +0.77 / +0.78% on the first two: on the 2 m line
+// the ramp spans 4.5 cells at K = 200, where the jerk reached only 70-85% of its limit.
 // The part of piece i (in s) that a jerk-limited start from rest at its start (end = false) or a
 // stop at its end takes to build up its acceleration: along the tangent u at that point, the
 // limits are v = min_axis vmax / |u_axis| (and so on); the jerk-saturated ramp reaches
