@@ -1,5 +1,6 @@
 // `timeopt simulate PROBLEM.json [--solver socp|ipopt] [--bandwidth W] [--control-rate HZ]
-//                   [--settle-time S] [--max-jerk J] [--output REPORT.json] [--states STATES.csv]`
+//                   [--settle-time S] [--max-jerk J] [--vehicle-max-jerk J] [--output REPORT.json]
+//                   [--states STATES.csv]`
 // `timeopt simulate --samples TRAJ.csv --max-velocity V --max-acceleration A [same options]`
 // Solves the temporal problem (or takes another planner's samples), flies the trajectory with the
 // jerk-input quadrotor of sim/ and writes the feasibility report. Exit codes: 0 every velocity and
@@ -37,7 +38,9 @@ struct SimulateArgs {
   double bandwidth = QuadrotorSimOptions().bandwidth;
   double control_rate = 1.0 / QuadrotorSimOptions().time_step;
   double settle_time = QuadrotorSimOptions().settle_time;
-  double max_jerk = 0.0;
+  // The problem's jerk limit (limits.max_jerk, every axis): overrides the JSON's; 0 removes it.
+  std::optional<double> max_jerk;
+  double vehicle_max_jerk = 0.0;  // the vehicle's own jerk limit (0: none)
   // Relative slack of the verdict. Unset: rounding only (1e-9), or 1% for a problem with a jerk
   // limit (the 1 kHz controller lags a continuous reference by a little).
   std::optional<double> tolerance;
@@ -52,10 +55,15 @@ int RunSimulate(const SimulateArgs& args) {
   if (!args.samples.empty() && !(args.max_velocity > 0.0 && args.max_acceleration > 0.0)) {
     throw std::invalid_argument("--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis)");
   }
+  if (!args.samples.empty() && args.max_jerk) {
+    throw std::invalid_argument("--max-jerk sets the problem's jerk limit, so it needs PROBLEM.json; for the "
+                                "vehicle's own limit use --vehicle-max-jerk");
+  }
   if (!std::isfinite(args.control_rate) || !std::isfinite(args.bandwidth) || !std::isfinite(args.settle_time) ||
-      !std::isfinite(args.max_jerk) || !std::isfinite(args.max_velocity) || !std::isfinite(args.max_acceleration)) {
-    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time, --max-jerk, --max-velocity and "
-                                "--max-acceleration must be finite");
+      !std::isfinite(args.max_jerk.value_or(0.0)) || !std::isfinite(args.vehicle_max_jerk) ||
+      !std::isfinite(args.max_velocity) || !std::isfinite(args.max_acceleration)) {
+    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time, --max-jerk, --vehicle-max-jerk, "
+                                "--max-velocity and --max-acceleration must be finite");
   }
   if (args.control_rate < 10.0 * args.bandwidth) {
     throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
@@ -65,7 +73,7 @@ int RunSimulate(const SimulateArgs& args) {
   options.bandwidth = args.bandwidth;
   options.time_step = 1.0 / args.control_rate;
   options.settle_time = args.settle_time;
-  if (args.max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
+  if (args.vehicle_max_jerk > 0.0) options.max_jerk = Eigen::Vector3d::Constant(args.vehicle_max_jerk);
   options.record_states = !args.states.empty();
   if (args.tolerance) options.limit_tolerance = *args.tolerance;
   QuadrotorSim sim(options);  // invalid options throw before the solve
@@ -86,7 +94,11 @@ int RunSimulate(const SimulateArgs& args) {
       json["samples"] = static_cast<int>(samples.size());
       json["total_time"] = duration;
     } else {
-      const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+      TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+      if (args.max_jerk) {
+        if (*args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
+        else problem.limits.max_jerk.reset();
+      }
       TemporalBackend backend = TemporalBackend::kSocp;
       if (!FromString(args.solver, &backend)) {
         throw std::invalid_argument("--solver: expected " + EnumChoices(kTemporalBackends));
@@ -156,7 +168,12 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
   sub->add_option("--settle-time", args->settle_time, "Flight after the trajectory ends, s")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  sub->add_option("--max-jerk", args->max_jerk, "Vehicle jerk limit per axis, m/s^3 (0: none)")
+  sub->add_option("--max-jerk", args->max_jerk,
+                  "The problem's jerk limit per axis, m/s^3: the profile becomes jerk-limited (overrides "
+                  "limits.max_jerk; 0 removes it)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--vehicle-max-jerk", args->vehicle_max_jerk,
+                  "The vehicle's own jerk limit per axis, m/s^3: commands beyond it are clipped (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_option("--tolerance", args->tolerance,

@@ -251,6 +251,22 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("give either PROBLEM.json or --samples"));
 
+  // --max-jerk makes the contract line's own problem jerk-limited: the same vehicle then flies it
+  // within 1% (exit 0), the plan being ~0.5 s longer than the paper's 7 s. With --samples it has no
+  // problem to limit (exit 2, naming --vehicle-max-jerk), and a negative value is refused.
+  r = RunCli("simulate " + line + " --max-jerk 2 -o " + Path("mj.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  json = ReadTextFile(Path("mj.json"));
+  EXPECT_LE(JsonNumber(json, "max_acceleration_ratio"), 1.01);
+  EXPECT_GT(JsonNumber(json, "total_time"), 7.0);
+  EXPECT_EQ(JsonNumber(json, "tolerance"), 0.01);
+  r = RunCli("simulate --samples " + Path("line.csv") + " --max-velocity 2 --max-acceleration 1 --max-jerk 2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--vehicle-max-jerk"));
+  r = RunCli("simulate " + line + " --max-jerk -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--max-jerk"));
+
   r = RunCli("simulate " + line + " --control-rate 50");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("--control-rate must be at least 10 x --bandwidth"));
