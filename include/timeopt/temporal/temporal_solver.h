@@ -55,6 +55,14 @@ struct SocpTemporalOptions {
   double tolerance = 1e-8;
   // Interior-point iteration limit. 100 (the temporal problem needs 15-30).
   int max_iterations = 100;
+  // Solve the problem first by the structured path where it applies (no equality rows, every row
+  // over one grid value or two neighbouring ones: the paper's and the certified rows, with or
+  // without rho; not lambda_a and not the jerk-limited mode): a primal-dual interior-point method
+  // on the unlifted problem whose Newton systems are banded along the path, started from a
+  // reachability profile (src/temporal/banded_ipm.h). It answers only when it meets the same
+  // tolerances; anything else goes to the conic solver, which then decides (statuses never depend
+  // on it). m = 10, K = 50, paper mode: 1.3 ms against 4.5 ms. false: always the conic solver.
+  bool structured = true;
 
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
   // and finite and max_iterations >= 1.
