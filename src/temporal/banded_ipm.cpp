@@ -61,6 +61,19 @@ struct Band {
 
   // In-place Cholesky L L'; false when a pivot falls below kPivotFloor times its diagonal.
   bool Factor() {
+    if (p == 1) {
+      // Tridiagonal (the paper's and the certified rows): v[2 i] diagonal, v[2 i + 1] sub-diagonal.
+      double* a = v.data();
+      for (int j = 0; j < n; ++j) {
+        const double original = a[2 * j];
+        const double diag = original - (j > 0 ? a[2 * j + 1] * a[2 * j + 1] : 0.0);
+        if (!(diag > kPivotFloor * std::abs(original)) || !std::isfinite(diag)) return false;
+        const double l = std::sqrt(diag);
+        a[2 * j] = l;
+        if (j + 1 < n) a[2 * (j + 1) + 1] /= l;
+      }
+      return true;
+    }
     for (int j = 0; j < n; ++j) {
       const int lo = std::max(0, j - p);
       double diag = At(j, j);
@@ -80,6 +93,15 @@ struct Band {
   }
   // Solves L L' x = b in place.
   void Solve(std::vector<double>& b) {
+    if (p == 1) {
+      const double* a = v.data();
+      double* x = b.data();
+      x[0] /= a[0];
+      for (int i = 1; i < n; ++i) x[i] = (x[i] - a[2 * i + 1] * x[i - 1]) / a[2 * i];
+      x[n - 1] /= a[2 * (n - 1)];
+      for (int i = n - 2; i >= 0; --i) x[i] = (x[i] - a[2 * (i + 1) + 1] * x[i + 1]) / a[2 * i];
+      return;
+    }
     for (int i = 0; i < n; ++i) {
       double a = b[static_cast<size_t>(i)];
       for (int k = std::max(0, i - p); k < i; ++k) a -= At(i, k) * b[static_cast<size_t>(k)];
@@ -112,17 +134,24 @@ class BandedIpm {
         return out;
       }
       if (it >= settings_.max_iterations) {
-        out.message = "banded path: iteration limit";
+        out.message = "structured path: iteration limit";
         return out;
       }
       if (!Step()) {
-        out.message = "banded path: the Newton system broke down";
+        out.message = "structured path: the Newton system broke down";
         return out;
       }
     }
   }
 
  private:
+  // A row v0 x_c0 + v1 x_c1 <= h over one value (v1 = 0, c1 = c0) or two neighbouring ones
+  // (c1 = c0 + 1), scaled so that h is +-1 or 0.
+  struct Row {
+    int c0 = 0, c1 = 0;
+    double v0 = 0.0, v1 = 0.0;
+  };
+
   // The rows, the cells and the bandwidth; false (not applicable) with a reason.
   bool Setup(std::string* why) {
     n_ = d_.num_vars;
@@ -130,27 +159,40 @@ class BandedIpm {
       *why = "no free values";
       return false;
     }
-    row_ptr_.assign(1, 0);
-    int p = 0;
+    rows_.clear();
+    h_.clear();
+    bool two_neighbours = true;
     const auto add_row = [&](const std::vector<std::pair<int, double>>& terms, double sign, double bound) {
       double scale = std::abs(bound);
       if (!(scale > 0.0)) {
         for (const auto& t : terms) scale = std::max(scale, std::abs(t.second));
       }
       if (!(scale > 0.0)) scale = 1.0;
-      int lo = n_, hi = -1;
-      for (const auto& t : terms) {
-        col_.push_back(t.first);
-        val_.push_back(sign * t.second / scale);
-        lo = std::min(lo, t.first);
-        hi = std::max(hi, t.first);
+      Row row;
+      if (terms.size() == 1) {
+        row.c0 = row.c1 = terms[0].first;
+        row.v0 = sign * terms[0].second / scale;
+      } else if (terms.size() == 2 && std::abs(terms[0].first - terms[1].first) == 1) {
+        const bool ordered = terms[0].first < terms[1].first;
+        const auto& first = ordered ? terms[0] : terms[1];
+        const auto& second = ordered ? terms[1] : terms[0];
+        row.c0 = first.first;
+        row.c1 = second.first;
+        row.v0 = sign * first.second / scale;
+        row.v1 = sign * second.second / scale;
+      } else {
+        two_neighbours = false;
+        return;
       }
+      rows_.push_back(row);
       h_.push_back(sign * bound / scale);
-      row_ptr_.push_back(static_cast<int>(col_.size()));
-      if (hi >= lo) p = std::max(p, hi - lo);
     };
     // Bound rows first: row v is -x_v <= 0 (the start keeps their residual at 0).
-    for (int v = 0; v < n_; ++v) add_row({{v, 1.0}}, -1.0, 0.0);
+    std::vector<std::pair<int, double>> single(1);
+    for (int v = 0; v < n_; ++v) {
+      single[0] = {v, 1.0};
+      add_row(single, -1.0, 0.0);
+    }
     for (const LinearRow& r : d_.rows) {
       if (r.lower == r.upper) {
         *why = "equality rows";
@@ -160,10 +202,18 @@ class BandedIpm {
       if (std::isfinite(r.lower)) add_row(r.terms, -1.0, r.lower);
     }
     for (int v = 0; v < n_; ++v) {
-      if (std::isfinite(d_.var_upper[static_cast<size_t>(v)])) add_row({{v, 1.0}}, 1.0, d_.var_upper[static_cast<size_t>(v)]);
+      single[0] = {v, 1.0};
+      if (std::isfinite(d_.var_upper[static_cast<size_t>(v)])) add_row(single, 1.0, d_.var_upper[static_cast<size_t>(v)]);
+    }
+    // Without the reachability start (which needs these rows) the method took 37-75 iterations
+    // where the conic solver takes 15-26 (lambda_a's rows over three values), so it stops here.
+    if (!two_neighbours) {
+      *why = "a row over more than two neighbouring values";
+      return false;
     }
     m_ = static_cast<int>(h_.size());
     cells_.clear();
+    int p = 1;
     for (const Cell& cell : d_.cells) {
       CellTerm c;
       for (int j = 0; j < 2; ++j) {
@@ -186,26 +236,21 @@ class BandedIpm {
       return false;
     }
     p_ = p;
-    // Without the reachability start the method took 37-75 iterations where the conic solver takes
-    // 15-26 (rows over three values: lambda_a), so it is not used there.
     if (!GreedyProfile(&greedy_)) {
-      *why = "no reachability start (rows over more than two consecutive values, or an empty set)";
+      *why = "the reachability pass found no profile";
       return false;
     }
     return true;
   }
 
-  double RowValue(int r, const std::vector<double>& x) const {
-    double a = 0.0;
-    for (int e = row_ptr_[static_cast<size_t>(r)]; e < row_ptr_[static_cast<size_t>(r) + 1]; ++e) {
-      a += val_[static_cast<size_t>(e)] * x[static_cast<size_t>(col_[static_cast<size_t>(e)])];
-    }
-    return a;
+  double RowValue(const Row& row, const std::vector<double>& x) const {
+    return row.v0 * x[static_cast<size_t>(row.c0)] + row.v1 * x[static_cast<size_t>(row.c1)];
   }
 
-  // x0: min(var_upper, cap) scaled by half of the largest t in (0, 1] that keeps every row holding
-  // at 0 satisfied at t x0 (as IpoptTemporalNlp::StartingPoint); s from the rows (at least
-  // kSlackFloor, which leaves a residual on rows the start violates); z = mu0 / s.
+  // x0: kGreedyWeight times the reachability profile plus the rest times min(var_upper, cap)
+  // scaled by half of the largest t in (0, 1] that keeps every row holding at 0 satisfied at t x0
+  // (as IpoptTemporalNlp::StartingPoint); s from the rows (at least kSlackFloor, which leaves a
+  // residual on rows the start violates); z = mu0 / s.
   void Start() {
     double cap = 0.0;
     for (double u : d_.var_upper) {
@@ -217,18 +262,18 @@ class BandedIpm {
     double t_max = 1.0;
     for (int r = n_; r < m_; ++r) {
       if (!(h_[static_cast<size_t>(r)] > 0.0)) continue;
-      const double value = RowValue(r, x_);
+      const double value = RowValue(rows_[static_cast<size_t>(r)], x_);
       if (value > h_[static_cast<size_t>(r)]) t_max = std::min(t_max, h_[static_cast<size_t>(r)] / value);
     }
-    for (double& v : x_) v *= 0.5 * t_max;
     for (int v = 0; v < n_; ++v) {
-      x_[static_cast<size_t>(v)] = kGreedyWeight * greedy_[static_cast<size_t>(v)] + (1.0 - kGreedyWeight) * x_[static_cast<size_t>(v)];
+      x_[static_cast<size_t>(v)] = kGreedyWeight * greedy_[static_cast<size_t>(v)] +
+                                   (1.0 - kGreedyWeight) * 0.5 * t_max * x_[static_cast<size_t>(v)];
     }
     s_.assign(static_cast<size_t>(m_), 0.0);
     z_.assign(static_cast<size_t>(m_), 0.0);
     constexpr double kSlackFloor = 1e-2;
     for (int r = 0; r < m_; ++r) {
-      const double slack = h_[static_cast<size_t>(r)] - RowValue(r, x_);
+      const double slack = h_[static_cast<size_t>(r)] - RowValue(rows_[static_cast<size_t>(r)], x_);
       s_[static_cast<size_t>(r)] = r < n_ ? x_[static_cast<size_t>(r)] : std::max(slack, kSlackFloor);
     }
     // z = mu0 / s with s'z = kStartGap J(x0).
@@ -238,27 +283,22 @@ class BandedIpm {
   }
 
   // A feasible profile by reachability along the path (as TOPP-RA's controllable sets), when every
-  // row touches one value or two consecutive ones: backward, the interval K_v of x_v from which the
-  // rest of the path stays feasible; forward, the largest x_v in K_v that the rows with x_{v-1}
-  // allow. False when the rows are not of that form or a K_v comes out empty.
+  // row touches one value or two consecutive ones (Setup): backward, the interval K_v of x_v from
+  // which the rest of the path stays feasible; forward, the largest x_v in K_v that the rows with
+  // x_{v-1} allow. False when a K_v comes out empty.
   bool GreedyProfile(std::vector<double>* out) const {
     // Single-value bounds l_v <= x_v <= u_v and the two-value rows of each consecutive pair.
     std::vector<double> l(static_cast<size_t>(n_), 0.0), u(static_cast<size_t>(n_), kInf);
     std::vector<std::vector<int>> pair_rows(static_cast<size_t>(n_));
     for (int r = 0; r < m_; ++r) {
-      const int b = row_ptr_[static_cast<size_t>(r)], e = row_ptr_[static_cast<size_t>(r) + 1];
-      if (e - b == 1) {
-        const int v = col_[static_cast<size_t>(b)];
-        const double a = val_[static_cast<size_t>(b)], h = h_[static_cast<size_t>(r)];
-        if (a > 0.0) u[static_cast<size_t>(v)] = std::min(u[static_cast<size_t>(v)], h / a);
-        else if (a < 0.0) l[static_cast<size_t>(v)] = std::max(l[static_cast<size_t>(v)], h / a);
+      const Row& row = rows_[static_cast<size_t>(r)];
+      if (row.v1 == 0.0) {
+        const double a = row.v0, h = h_[static_cast<size_t>(r)];
+        if (a > 0.0) u[static_cast<size_t>(row.c0)] = std::min(u[static_cast<size_t>(row.c0)], h / a);
+        else if (a < 0.0) l[static_cast<size_t>(row.c0)] = std::max(l[static_cast<size_t>(row.c0)], h / a);
         continue;
       }
-      if (e - b != 2) return false;
-      const int v0 = std::min(col_[static_cast<size_t>(b)], col_[static_cast<size_t>(b) + 1]);
-      const int v1 = std::max(col_[static_cast<size_t>(b)], col_[static_cast<size_t>(b) + 1]);
-      if (v1 != v0 + 1) return false;
-      pair_rows[static_cast<size_t>(v0)].push_back(r);
+      pair_rows[static_cast<size_t>(row.c0)].push_back(r);  // c1 = c0 + 1 (Setup)
     }
     // A value without an upper bound of its own (a vanishing tangent) gets a large one: the rows
     // with its neighbours bound it anyway, and the polygons below stay bounded.
@@ -272,12 +312,10 @@ class BandedIpm {
       if (!std::isfinite(top)) top = std::max(cap, l[static_cast<size_t>(v)]);
       if (l[static_cast<size_t>(v)] > top) return false;
     }
-    // Row r as a x_v + b x_{v+1} <= h.
-    const auto coefs = [&](int r, int v, double* a, double* b, double* h) {
-      const int e = row_ptr_[static_cast<size_t>(r)];
-      const bool first_is_v = col_[static_cast<size_t>(e)] == v;
-      *a = val_[static_cast<size_t>(e) + (first_is_v ? 0 : 1)];
-      *b = val_[static_cast<size_t>(e) + (first_is_v ? 1 : 0)];
+    // Row r (over v and v + 1) as a x_v + b x_{v+1} <= h.
+    const auto coefs = [&](int r, int /*v*/, double* a, double* b, double* h) {
+      *a = rows_[static_cast<size_t>(r)].v0;
+      *b = rows_[static_cast<size_t>(r)].v1;
       *h = h_[static_cast<size_t>(r)];
     };
     std::vector<double> lo(l), hi(u);
@@ -353,15 +391,16 @@ class BandedIpm {
       const double reg_grad = 2.0 * c.reg * (b1 - b0);
       double db[2] = {-reg_grad, reg_grad};
       double h00 = 2.0 * c.reg, h11 = 2.0 * c.reg, h01 = -2.0 * c.reg;
+      const double S2 = S * S;
       if (c.var[0] >= 0) {
-        db[0] += -half / (S * S * r0);
-        h00 += half / (S * S * b0) * (1.0 / S + 0.5 / r0);
+        db[0] += -half / (S2 * r0);
+        h00 += half / (S2 * b0) * (1.0 / S + 0.5 / r0);
       }
       if (c.var[1] >= 0) {
-        db[1] += -half / (S * S * r1);
-        h11 += half / (S * S * b1) * (1.0 / S + 0.5 / r1);
+        db[1] += -half / (S2 * r1);
+        h11 += half / (S2 * b1) * (1.0 / S + 0.5 / r1);
       }
-      if (c.var[0] >= 0 && c.var[1] >= 0) h01 += half / (S * S * S * r0 * r1);
+      if (c.var[0] >= 0 && c.var[1] >= 0) h01 += half / (S2 * S * r0 * r1);
       for (int j = 0; j < 2; ++j) {
         if (c.var[j] >= 0) grad_[static_cast<size_t>(c.var[j])] += c.scale[j] * db[j];
       }
@@ -374,125 +413,111 @@ class BandedIpm {
       }
     }
     rd_ = grad_;
-    rp_.assign(static_cast<size_t>(m_), 0.0);
-    for (int r = 0; r < m_; ++r) {
-      double gx = 0.0;
-      for (int e = row_ptr_[static_cast<size_t>(r)]; e < row_ptr_[static_cast<size_t>(r) + 1]; ++e) {
-        const size_t v = static_cast<size_t>(col_[static_cast<size_t>(e)]);
-        gx += val_[static_cast<size_t>(e)] * x_[v];
-        rd_[v] += val_[static_cast<size_t>(e)] * z_[static_cast<size_t>(r)];
-      }
-      rp_[static_cast<size_t>(r)] = gx + s_[static_cast<size_t>(r)] - h_[static_cast<size_t>(r)];
+    rp_.resize(static_cast<size_t>(m_));
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      const Row& row = rows_[r];
+      rd_[static_cast<size_t>(row.c0)] += row.v0 * z_[r];
+      rd_[static_cast<size_t>(row.c1)] += row.v1 * z_[r];
+      rp_[r] = RowValue(row, x_) + s_[r] - h_[r];
     }
   }
 
   bool Converged() const {
     double rp = 0.0, rd = 0.0, hmax = 1.0, gmax = 1.0, gap = 0.0;
-    for (int r = 0; r < m_; ++r) {
-      rp = std::max(rp, std::abs(rp_[static_cast<size_t>(r)]));
-      hmax = std::max(hmax, std::abs(h_[static_cast<size_t>(r)]));
-      gap += s_[static_cast<size_t>(r)] * z_[static_cast<size_t>(r)];
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      rp = std::max(rp, std::abs(rp_[r]));
+      hmax = std::max(hmax, std::abs(h_[r]));
+      gap += s_[r] * z_[r];
     }
-    for (int v = 0; v < n_; ++v) {
-      rd = std::max(rd, std::abs(rd_[static_cast<size_t>(v)]));
-      gmax = std::max(gmax, std::abs(grad_[static_cast<size_t>(v)]));
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) {
+      rd = std::max(rd, std::abs(rd_[v]));
+      gmax = std::max(gmax, std::abs(grad_[v]));
     }
     return rp <= settings_.tolerance * hmax && rd <= settings_.tolerance * gmax &&
            gap <= settings_.gap_tolerance * std::abs(objective_);
   }
 
-  // Solves the Newton system for the complementarity target rc into dx, ds, dz.
-  void Direction(const std::vector<double>& rc) {
-    dx_.assign(static_cast<size_t>(n_), 0.0);
-    for (int v = 0; v < n_; ++v) dx_[static_cast<size_t>(v)] = -rd_[static_cast<size_t>(v)];
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      const double t = (rc[i] - z_[i] * rp_[i]) / s_[i];
-      for (int e = row_ptr_[i]; e < row_ptr_[i + 1]; ++e) dx_[static_cast<size_t>(col_[static_cast<size_t>(e)])] += val_[static_cast<size_t>(e)] * t;
+  // Solves the Newton system for the complementarity target rc into dx, ds, dz; returns the
+  // largest step in (0, inf] that keeps s and z >= 0.
+  double Direction(const std::vector<double>& rc) {
+    dx_.resize(static_cast<size_t>(n_));
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      const Row& row = rows_[r];
+      const double t = (rc[r] - z_[r] * rp_[r]) * inv_s_[r];
+      dx_[static_cast<size_t>(row.c0)] += row.v0 * t;
+      dx_[static_cast<size_t>(row.c1)] += row.v1 * t;
     }
     factor_.Solve(dx_);
     ds_.resize(static_cast<size_t>(m_));
     dz_.resize(static_cast<size_t>(m_));
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      const double gdx = RowValue(r, dx_);
-      ds_[i] = -rp_[i] - gdx;
-      dz_[i] = (z_[i] * (rp_[i] + gdx) - rc[i]) / s_[i];
-    }
-  }
-
-  double MaxStep() const {
     double alpha = kInf;
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      if (ds_[i] < 0.0) alpha = std::min(alpha, -s_[i] / ds_[i]);
-      if (dz_[i] < 0.0) alpha = std::min(alpha, -z_[i] / dz_[i]);
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      const double gdx = RowValue(rows_[r], dx_);
+      const double ds = -rp_[r] - gdx;
+      const double dz = (z_[r] * (rp_[r] + gdx) - rc[r]) * inv_s_[r];
+      ds_[r] = ds;
+      dz_[r] = dz;
+      if (ds < 0.0) alpha = std::min(alpha, -s_[r] / ds);
+      if (dz < 0.0) alpha = std::min(alpha, -z_[r] / dz);
     }
     return alpha;
   }
 
   bool Step() {
-    // M = grad^2 J + G' (Z / S) G.
+    // M = grad^2 J + G' (Z / S) G, and mu.
     factor_ = hess_;
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      const double w = z_[i] / s_[i];
-      for (int e = row_ptr_[i]; e < row_ptr_[i + 1]; ++e) {
-        const int a = col_[static_cast<size_t>(e)];
-        const double ga = val_[static_cast<size_t>(e)] * w;
-        for (int f = row_ptr_[i]; f <= e; ++f) {
-          const int b = col_[static_cast<size_t>(f)];
-          factor_.Add(a, b, ga * val_[static_cast<size_t>(f)]);
-        }
+    double mu = 0.0;
+    inv_s_.resize(static_cast<size_t>(m_));
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      const Row& row = rows_[r];
+      inv_s_[r] = 1.0 / s_[r];
+      const double w = z_[r] * inv_s_[r];
+      mu += s_[r] * z_[r];
+      factor_.At(row.c0, row.c0) += w * row.v0 * row.v0;
+      if (row.v1 != 0.0) {
+        factor_.At(row.c1, row.c1) += w * row.v1 * row.v1;
+        factor_.At(row.c1, row.c0) += w * row.v0 * row.v1;
       }
     }
-    if (!factor_.Factor()) return false;
-    double mu = 0.0;
-    for (int r = 0; r < m_; ++r) mu += s_[static_cast<size_t>(r)] * z_[static_cast<size_t>(r)];
     mu /= m_;
+    if (!factor_.Factor()) return false;
     // Predictor.
     rc_.resize(static_cast<size_t>(m_));
-    for (int r = 0; r < m_; ++r) rc_[static_cast<size_t>(r)] = s_[static_cast<size_t>(r)] * z_[static_cast<size_t>(r)];
-    Direction(rc_);
-    const double alpha_aff = std::min(1.0, MaxStep());
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) rc_[r] = s_[r] * z_[r];
+    const double alpha_aff = std::min(1.0, Direction(rc_));
     double mu_aff = 0.0;
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      mu_aff += (s_[i] + alpha_aff * ds_[i]) * (z_[i] + alpha_aff * dz_[i]);
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      mu_aff += (s_[r] + alpha_aff * ds_[r]) * (z_[r] + alpha_aff * dz_[r]);
     }
     mu_aff /= m_;
     const double ratio = std::max(0.0, mu_aff / mu);
     const double sigma = std::min(1.0, ratio * ratio * ratio);
     // Corrector.
-    for (int r = 0; r < m_; ++r) {
-      const size_t i = static_cast<size_t>(r);
-      rc_[i] = s_[i] * z_[i] + ds_[i] * dz_[i] - sigma * mu;
-    }
-    Direction(rc_);
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) rc_[r] = s_[r] * z_[r] + ds_[r] * dz_[r] - sigma * mu;
+    const double alpha = std::min(1.0, kStepFraction * Direction(rc_));
     for (double v : dx_) {
       if (!std::isfinite(v)) return false;
     }
-    const double alpha = std::min(1.0, kStepFraction * MaxStep());
     if (!(alpha > 0.0)) return false;
-    for (int v = 0; v < n_; ++v) x_[static_cast<size_t>(v)] += alpha * dx_[static_cast<size_t>(v)];
-    for (int r = 0; r < m_; ++r) {
-      s_[static_cast<size_t>(r)] += alpha * ds_[static_cast<size_t>(r)];
-      z_[static_cast<size_t>(r)] += alpha * dz_[static_cast<size_t>(r)];
+    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
+      s_[r] += alpha * ds_[r];
+      z_[r] += alpha * dz_[r];
     }
     // The bound rows keep x = s exactly (their residual is 0 and stays 0 up to rounding).
-    for (int v = 0; v < n_; ++v) x_[static_cast<size_t>(v)] = s_[static_cast<size_t>(v)];
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) x_[v] = s_[v];
     return true;
   }
 
   const TemporalDiscretization& d_;
   BandedIpmSettings settings_;
   int n_ = 0, m_ = 0, p_ = 0;
-  std::vector<int> row_ptr_, col_;
-  std::vector<double> val_, h_;
+  std::vector<Row> rows_;
+  std::vector<double> h_;
   std::vector<CellTerm> cells_;
   std::vector<double> greedy_;  // the reachability profile (GreedyProfile)
   std::vector<double> x_, s_, z_;
-  std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_;
+  std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_;
   double objective_ = 0.0;
   Band hess_, factor_;
 };
