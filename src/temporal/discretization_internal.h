@@ -120,9 +120,9 @@ class RowBuilder {
   // only when a constant row is found infeasible, so that building rows allocates no strings).
   template <typename What>
   void Finish(LinearRow::Kind kind, double lower, double upper, const What& what) {
-    std::vector<std::pair<int, double>> kept;
-    for (const auto& t : terms_) if (t.second != 0.0) kept.push_back(t);
-    if (kept.empty()) {
+    size_t nonzero = 0;
+    for (const auto& t : terms_) nonzero += t.second != 0.0 ? 1 : 0;
+    if (nonzero == 0) {
       // Scale the slack by the finite bounds only (an infinite one would disable the check).
       double scale = 1.0;
       if (std::isfinite(lower)) scale = std::max(scale, std::abs(lower));
@@ -139,7 +139,10 @@ class RowBuilder {
     } else {
       LinearRow row;
       row.kind = kind;
-      row.terms = std::move(kept);
+      row.terms.reserve(nonzero);
+      for (const auto& t : terms_) {
+        if (t.second != 0.0) row.terms.push_back(t);
+      }
       row.lower = lower - constant_;
       row.upper = upper - constant_;
       d_.rows.push_back(std::move(row));
