@@ -1,5 +1,6 @@
-// Temporal stage benchmarks (issue 4): SOCP vs Ipopt over m in {5, 10, 20} pieces and K in
-// {30, 50, 100} cells per piece, and SOCP time against the number of cells N = m K from 100 to
+// Temporal stage benchmarks (issues 4 and 19): SOCP vs Ipopt over m in {5, 10, 20} pieces and K in
+// {30, 50, 100} cells per piece (and m = 10, K = 200), the conic solver alone on the same problems,
+// rho, lambda_a, the planner's case, and SOCP time against the number of cells N = m K from 100 to
 // 20,000 with its log-log slope. Curves: natural cubic splines through a seeded random walk,
 // vmax = 3 m/s, amax = 2 m/s^2 per axis, rest to rest, rho = 0, paper constraints; BM_SocpRho and
 // BM_IpoptRho the same at m = 10, K = 50 with rho = 0.1 and 1.
@@ -44,12 +45,13 @@ TemporalProblem MakeProblem(int pieces, int K, ConstraintMode mode = ConstraintM
 }
 
 // Solves `p` with one solver per benchmark (its workspace reused across repetitions) and reports
-// the result's figures as counters (and the jerk-limited mode's, when it has a jerk limit).
-void RunProblem(benchmark::State& state, TemporalBackend backend, const TemporalProblem& p) {
-  auto solver = MakeTemporalSolver(backend);
+// the result's figures as counters (and the jerk-limited mode's, when it has a jerk limit):
+// build_ms and solver_ms (of the last repetition), iterations, us_per_iteration, and structured
+// (1 when the SOCP backend's structured path answered).
+void RunSolver(benchmark::State& state, TemporalSolver& solver, const TemporalProblem& p) {
   TemporalResult r;
   for (auto _ : state) {
-    r = solver->Solve(p);
+    r = solver.Solve(p);
     // ClobberMemory, not DoNotOptimize(r.total_time): the latter's "+m,r" constraint on a double
     // member corrupted the value with GCC 12 and Google Benchmark 1.7.1.
     benchmark::ClobberMemory();
@@ -61,10 +63,17 @@ void RunProblem(benchmark::State& state, TemporalBackend backend, const Temporal
   state.counters["solver_ms"] = r.solve_time_seconds * 1e3;
   state.counters["build_ms"] = r.build_time_seconds * 1e3;
   state.counters["max_acc_ratio"] = r.max_acceleration_ratio;
+  state.counters["us_per_iteration"] = r.iterations > 0 ? 1e6 * r.solve_time_seconds / r.iterations : 0.0;
+  state.counters["structured"] = r.message.find("structured path") != std::string::npos ? 1.0 : 0.0;
   if (p.limits.max_jerk) {
     state.counters["scp"] = r.scp_iterations;
     state.counters["max_jerk_ratio"] = r.max_jerk_ratio;
   }
+}
+
+void RunProblem(benchmark::State& state, TemporalBackend backend, const TemporalProblem& p) {
+  auto solver = MakeTemporalSolver(backend);
+  RunSolver(state, *solver, p);
 }
 
 void Run(benchmark::State& state, TemporalBackend backend, ConstraintMode mode, double rho = 0.0) {
@@ -80,9 +89,39 @@ void Grid(benchmark::internal::Benchmark* b) {
   for (int m : {5, 10, 20}) for (int K : {30, 50, 100}) b->Args({m, K});
   b->Unit(benchmark::kMillisecond);
 }
-BENCHMARK(BM_Socp)->Apply(Grid);
-BENCHMARK(BM_SocpCertified)->Apply(Grid);
+BENCHMARK(BM_Socp)->Apply(Grid)->Args({10, 200});
+BENCHMARK(BM_SocpCertified)->Apply(Grid)->Args({10, 200});
 BENCHMARK(BM_Ipopt)->Apply(Grid);
+
+// The same problems with the conic solver alone (SocpTemporalOptions::structured = false): the
+// structured path's gain in the same run. Third argument: 0 paper rows, 1 certified.
+void BM_SocpConicOnly(benchmark::State& state) {
+  SocpTemporalOptions options;
+  options.structured = false;
+  auto solver = MakeSocpTemporalSolver(options);
+  RunSolver(state, *solver,
+            MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                        state.range(2) == 1 ? ConstraintMode::kCertified : ConstraintMode::kPaper));
+}
+BENCHMARK(BM_SocpConicOnly)
+    ->Args({10, 50, 0})->Args({10, 50, 1})->Args({10, 200, 0})->Args({10, 200, 1})
+    ->Unit(benchmark::kMillisecond);
+
+// lambda_a (max_acceleration_change = 0.2 m/s^2 per cell): rows over three grid values, which the
+// structured path does not take; the conic solver answers.
+void BM_SocpLambda(benchmark::State& state) {
+  TemporalProblem p = MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  p.limits.max_acceleration_change = 0.2;
+  RunProblem(state, TemporalBackend::kSocp, p);
+}
+BENCHMARK(BM_SocpLambda)->Args({10, 50})->Unit(benchmark::kMillisecond);
+
+// The planner's temporal case: certified rows, K = 20 (PlannerConfig's defaults), on m = 10 and 27
+// pieces (the forest plan has 27).
+void BM_SocpPlannerCase(benchmark::State& state) {
+  Run(state, TemporalBackend::kSocp, ConstraintMode::kCertified);
+}
+BENCHMARK(BM_SocpPlannerCase)->Args({10, 20})->Args({27, 20})->Unit(benchmark::kMillisecond);
 
 // rho > 0 (the one large rotated cone of eq. 50): m = 10, K = 50, rho = 0.1 * the third argument.
 // The jerk-limited mode (limits.max_jerk = 10 m/s^3, 5 x amax) on the same curves: every convex
