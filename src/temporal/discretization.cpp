@@ -119,8 +119,12 @@ double RunFactor(const std::vector<CellRow>& r, size_t first, size_t last, size_
 void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   std::vector<CellRow>& r = *rows;
   if (r.size() <= 2 || !(tolerance > 0.0)) return;
-  std::vector<size_t> kept{0};
-  std::vector<double> factor(r.size(), 1.0);
+  // Buffers reused across cells and calls (one per thread).
+  thread_local std::vector<size_t> kept;
+  thread_local std::vector<double> factor;
+  thread_local std::vector<CellRow> out;
+  kept.assign(1, 0);
+  factor.assign(r.size(), 1.0);
   size_t run_start = 1;   // first dropped vertex of the current run (empty run if it is i)
   double run_factor = 1.0;  // the factor the current run needs with its next vertex
   auto close_run = [&](size_t next) {
@@ -142,13 +146,12 @@ void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   }
   close_run(r.size() - 1);
   kept.push_back(r.size() - 1);
-  std::vector<CellRow> out;
-  out.reserve(kept.size());
+  out.clear();
   for (size_t k : kept) {
     out.push_back(r[k]);
     out.back().w *= factor[k];
   }
-  r = std::move(out);
+  r.assign(out.begin(), out.end());
 }
 
 }  // namespace
