@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -32,11 +33,28 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
 
   const json& limits = Require(j, "limits", "");
   if (!limits.is_object()) throw std::invalid_argument("limits: expected an object");
-  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk"},
+  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk",
+                             "max_speed", "max_acceleration_norm", "max_thrust", "min_thrust", "max_tilt",
+                             "gravity"},
                     "limits");
-  p.limits.max_velocity = PerAxis(Require(limits, "max_velocity", "limits."), "limits.max_velocity");
-  p.limits.max_acceleration =
-      PerAxis(Require(limits, "max_acceleration", "limits."), "limits.max_acceleration");
+  // The per-axis limits are optional when the quadrotor's norm limits bound the same quantity
+  // (TemporalProblem::Validate says which is missing): absent means none on any axis.
+  const auto present = [&](const char* key) { return limits.contains(key) && !limits.at(key).is_null(); };
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  p.limits.max_velocity = present("max_velocity") ? PerAxis(limits.at("max_velocity"), "limits.max_velocity")
+                                                  : Eigen::Vector3d::Constant(kNone);
+  p.limits.max_acceleration = present("max_acceleration")
+                                  ? PerAxis(limits.at("max_acceleration"), "limits.max_acceleration")
+                                  : Eigen::Vector3d::Constant(kNone);
+  const auto optional_number = [&](const char* key, std::optional<double>* field) {
+    if (present(key)) *field = internal::FiniteNumber(limits.at(key), std::string("limits.") + key);
+  };
+  optional_number("max_speed", &p.limits.max_speed);
+  optional_number("max_acceleration_norm", &p.limits.max_acceleration_norm);
+  optional_number("max_thrust", &p.limits.max_thrust);
+  optional_number("min_thrust", &p.limits.min_thrust);
+  optional_number("max_tilt", &p.limits.max_tilt);
+  if (present("gravity")) p.limits.gravity = internal::FiniteNumber(limits.at("gravity"), "limits.gravity");
   if (limits.contains("max_acceleration_change") && !limits.at("max_acceleration_change").is_null()) {
     p.limits.max_acceleration_change = internal::FiniteNumber(
         limits.at("max_acceleration_change"), "limits.max_acceleration_change");
@@ -97,6 +115,15 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   j["reduced_accuracy"] = r.reduced_accuracy;
   j["max_velocity_ratio"] = ok ? json(r.max_velocity_ratio) : json(nullptr);
   j["max_acceleration_ratio"] = ok ? json(r.max_acceleration_ratio) : json(nullptr);
+  // The quadrotor's limits, for the ones given.
+  const auto ratio = [&](const char* key, const std::optional<double>& value) {
+    if (value) j[key] = ok ? json(*value) : json(nullptr);
+  };
+  ratio("max_speed_ratio", r.max_speed_ratio);
+  ratio("max_acceleration_norm_ratio", r.max_acceleration_norm_ratio);
+  ratio("max_thrust_ratio", r.max_thrust_ratio);
+  ratio("min_thrust_ratio", r.min_thrust_ratio);
+  ratio("max_tilt_ratio", r.max_tilt_ratio);
   if (r.jerk_limited) {
     // Jerk-limited results only (the paper's results keep their keys).
     j["max_jerk_ratio"] = ok ? json(r.max_jerk_ratio) : json(nullptr);

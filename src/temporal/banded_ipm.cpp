@@ -159,6 +159,10 @@ class BandedIpm {
       *why = "no free values";
       return false;
     }
+    if (!d_.cone_rows.empty() || !d_.cubic_rows.empty()) {
+      *why = "cone or cubic rows";
+      return false;
+    }
     rows_.clear();
     h_.clear();
     bool two_neighbours = true;

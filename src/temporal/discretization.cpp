@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -185,6 +186,18 @@ double CubicRow::Value(const std::array<double, 3>& b) const {
   return value;
 }
 
+Eigen::Vector3d ConeRow::NormPart(const std::vector<double>& b) const {
+  Eigen::Vector3d v = norm_constant;
+  for (size_t j = 0; j < grid.size(); ++j) v += norm[j] * b[j];
+  return v;
+}
+
+double ConeRow::BoundPart(const std::vector<double>& b) const {
+  double t = bound_constant;
+  for (size_t j = 0; j < grid.size(); ++j) t += bound[j] * b[j];
+  return t;
+}
+
 double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const {
   double worst = 0.0;
   for (size_t v = 0; v < var_upper.size(); ++v) {
@@ -200,6 +213,12 @@ double TemporalDiscretization::MaxViolation(const std::vector<double>& x) const 
   for (const CubicRow& r : cubic_rows) {
     const std::array<double, 3> b = {GridB(r.grid[0], x), GridB(r.grid[1], x), GridB(r.grid[2], x)};
     worst = std::max(worst, r.Value(b) - 1.0);
+  }
+  std::vector<double> b;
+  for (const ConeRow& r : cone_rows) {
+    b.clear();
+    for (int g : r.grid) b.push_back(GridB(g, x));
+    worst = std::max(worst, r.NormPart(b).norm() - r.BoundPart(b));
   }
   return worst;
 }
@@ -323,7 +342,13 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k <= K; ++k) grid_tangent[static_cast<size_t>(d.GridIndex(i, k))] = curve.Evaluate(i, k * ds, 1);
   }
-  const double vref = limits.max_velocity.maxCoeff();
+  // (The largest finite one: per-axis limits may be absent, +infinity, when max_speed is given.)
+  double vref = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    if (std::isfinite(limits.max_velocity(a))) vref = std::max(vref, limits.max_velocity(a));
+  }
+  if (limits.max_speed) vref = std::max(vref, *limits.max_speed);
+  if (!(vref > 0.0)) vref = 1.0;
   std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
   for (int i = 0; i < m; ++i) {
     double t_max = 0.0;
@@ -400,11 +425,25 @@ void AddPaperVelocityRows(const TemporalProblem& problem,
       const int g = d.GridIndex(i, k);
       const GridValue& v = d.grid[static_cast<size_t>(g)];
       const Eigen::Vector3d& t = grid_tangent[static_cast<size_t>(g)];
+      if (problem.limits.max_speed && t.norm() > problem.zero_tangent_tolerance) {
+        // The quadrotor's speed: |f'|^2 b <= max_speed^2.
+        const double speed2 = *problem.limits.max_speed * *problem.limits.max_speed;
+        if (v.var >= 0) {
+          double& ub = d.var_upper[static_cast<size_t>(v.var)];
+          ub = std::min(ub, speed2 / (t.squaredNorm() * v.scale));
+        } else {
+          row.Add(g, t.squaredNorm());
+          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(), speed2, [&] {
+            return "squared speed at piece " + std::to_string(i) + " s=" + std::to_string(k * ds);
+          });
+        }
+      }
       for (int a = 0; a < 3; ++a) {
         // A tangent component that vanishes up to rounding (e.g. 1e-15 on an axis the curve
         // does not move along) bounds nothing but would put a huge number (vmax^2 / 1e-30) into
         // the problem data.
         if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
+        if (!std::isfinite(vmax2(a))) continue;  // no limit on this axis
         const double t2 = t(a) * t(a);
         if (v.var >= 0) {
           double& ub = d.var_upper[static_cast<size_t>(v.var)];
@@ -420,6 +459,72 @@ void AddPaperVelocityRows(const TemporalProblem& problem,
       }
     }
   }
+}
+
+// The largest acceleration norm the quadrotor's limits allow (infinite without any):
+// max_acceleration_norm, and max_thrust + gravity (||acc|| <= ||acc + g e3|| + g).
+double QuadrotorAccelerationCap(const TemporalLimits& limits) {
+  double cap = std::numeric_limits<double>::infinity();
+  if (limits.max_acceleration_norm) cap = std::min(cap, *limits.max_acceleration_norm);
+  if (limits.max_thrust) cap = std::min(cap, *limits.max_thrust + limits.gravity);
+  return cap;
+}
+
+void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vector<int>& grid,
+                                  const std::vector<Eigen::Vector3d>& coef,
+                                  const std::function<std::string()>& where, RowBuilder& row,
+                                  TemporalDiscretization* d) {
+  const double g = limits.gravity;
+  const auto add_cone = [&](ConeRow::Kind kind, double scale, const Eigen::Vector3d& constant,
+                            const Eigen::Vector3d& mask, double bound_per_z, const char* what) {
+    ConeRow r;
+    r.kind = kind;
+    r.grid = grid;
+    r.norm_constant = constant.cwiseProduct(mask) / scale;
+    r.bound_constant = 1.0;
+    for (const Eigen::Vector3d& c : coef) {
+      r.norm.push_back(c.cwiseProduct(mask) / scale);
+      r.bound.push_back(bound_per_z * c(2) / scale);
+    }
+    // All values fixed: a constant row, decided here.
+    bool constant_row = true;
+    std::vector<double> b;
+    for (int v : grid) {
+      const GridValue& gv = d->grid[static_cast<size_t>(v)];
+      constant_row = constant_row && gv.var < 0;
+      b.push_back(gv.fixed);
+    }
+    if (constant_row) {
+      if (r.NormPart(b).norm() > r.BoundPart(b) + kConstantRowSlack && !d->infeasible_reason) {
+        d->infeasible_reason = std::string(what) + " at " + where() + " is exceeded whatever the time allocation";
+      }
+      return;
+    }
+    d->cone_rows.push_back(std::move(r));
+  };
+  const Eigen::Vector3d all(1.0, 1.0, 1.0), horizontal(1.0, 1.0, 0.0), up(0.0, 0.0, g);
+  if (limits.max_acceleration_norm) {
+    add_cone(ConeRow::Kind::kAccelerationNorm, *limits.max_acceleration_norm, Eigen::Vector3d::Zero(), all, 0.0,
+             "limits.max_acceleration_norm");
+  }
+  if (limits.max_thrust) {
+    add_cone(ConeRow::Kind::kThrust, *limits.max_thrust, up, all, 0.0, "limits.max_thrust");
+  }
+  const auto add_vertical = [&](double lower, const char* what) {
+    // acc_z >= lower.
+    for (size_t j = 0; j < grid.size(); ++j) row.Add(grid[j], coef[j](2));
+    row.Finish(LinearRow::Kind::kAcceleration, lower, std::numeric_limits<double>::infinity(),
+               [&] { return std::string(what) + " at " + where(); });
+  };
+  if (limits.max_tilt) {
+    // ||acc_xy|| <= tan(tilt) (acc_z + g), scaled by tan(tilt) g; and acc_z + g >= 0 (the cone
+    // implies it; the Ipopt backend's smooth form needs it written).
+    const double tan_tilt = std::tan(*limits.max_tilt);
+    add_cone(ConeRow::Kind::kTilt, tan_tilt * g, Eigen::Vector3d::Zero(), horizontal, tan_tilt,
+             "limits.max_tilt");
+    add_vertical(-g, "thrust pointing up (limits.max_tilt)");
+  }
+  if (limits.min_thrust) add_vertical(*limits.min_thrust - g, "limits.min_thrust (acc_z + gravity)");
 }
 
 // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on
@@ -446,6 +551,8 @@ std::vector<Eigen::Matrix<double, 3, 2>> MidCellAccelerations(const TemporalProb
     for (int a = 0; a < 3; ++a) {
       if (f1(a) != 0.0) cap = std::min(cap, limits.max_acceleration(a) / std::abs(f1(a)));
     }
+    const double norm_cap = QuadrotorAccelerationCap(limits);
+    if (f1.norm() > 0.0) cap = std::min(cap, norm_cap / f1.norm());
     if (std::isfinite(cap)) caps.push_back(cap);
   }
   if (!caps.empty()) {
@@ -493,10 +600,21 @@ void AddCellRows(const TemporalProblem& problem,
       second_derivative.push_back(curve.piece(i).Derivative(2).coefficients());
     }
   }
+  const bool quadrotor = limits.HasNormLimits();
+  // Certified mode with the quadrotor's limits: sum over axes of f'^2 (the speed), and the
+  // acceleration's Bernstein control points per axis (coefficients on b0 and b1).
+  SmallPoly speed2;
+  std::vector<Eigen::Vector3d> control0, control1;
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
     const int k = c.first_grid - d.GridIndex(c.piece, 0);
     cell_rows.clear();
+    const std::vector<int> cell_grid = {c.first_grid, c.first_grid + 1};
+    const auto where = [&] { return "piece " + std::to_string(c.piece) + " cell " + std::to_string(k); };
+    if (quadrotor && problem.constraint_mode == ConstraintMode::kPaper) {
+      AddQuadrotorAccelerationRows(limits, cell_grid, {mid_acc[ci].col(0), mid_acc[ci].col(1)}, where, row, &d);
+    }
+    speed2 = SmallPoly::Zero(1);
     for (int a = 0; a < 3; ++a) {
       const double amax = limits.max_acceleration(a);
       if (problem.constraint_mode == ConstraintMode::kPaper) {
@@ -508,7 +626,12 @@ void AddCellRows(const TemporalProblem& problem,
       // Certified velocity: Bernstein coefficients of f'(s(u))^2 ((1 - u) b0 + u b1).
       const SmallPoly q = Shifted(first_derivative[c.piece].row(a).transpose(), k * ds, ds);
       const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
-      if (q.cwiseAbs().maxCoeff() > 0.0) {
+      if (limits.max_speed) {
+        const SmallPoly q2 = Multiply(q, q);
+        const int size = static_cast<int>(std::max(speed2.size(), q2.size()));
+        speed2 = Padded(speed2, size) + Padded(q2, size);
+      }
+      if (q.cwiseAbs().maxCoeff() > 0.0 && std::isfinite(vmax2(a))) {
         const SmallPoly q2 = Multiply(q, q);
         SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
         SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
@@ -527,10 +650,40 @@ void AddCellRows(const TemporalProblem& problem,
       const int size = static_cast<int>(std::max(q.size(), p2a.size()));
       const SmallPoly c0 = bernstein.Convert(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
       const SmallPoly c1 = bernstein.Convert(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
+      if (quadrotor) {
+        if (a == 0) {
+          control0.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
+          control1.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
+        }
+        for (int j = 0; j < size; ++j) {
+          control0[static_cast<size_t>(j)](a) = c0(j);
+          control1[static_cast<size_t>(j)](a) = c1(j);
+        }
+      }
+      if (!std::isfinite(amax)) continue;  // no limit on this axis
       for (int j = 0; j < size; ++j) {
         const Eigen::Vector2d w(c0(j) / amax, c1(j) / amax);
         cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
         cell_rows.push_back({-w, LinearRow::Kind::kAcceleration});
+      }
+    }
+    if (problem.constraint_mode == ConstraintMode::kCertified && quadrotor) {
+      // The acceleration curve lies in the convex hull of its control points, so bounding every
+      // control point by the (convex) cones bounds the whole cell.
+      for (size_t j = 0; j < control0.size(); ++j) {
+        AddQuadrotorAccelerationRows(limits, cell_grid, {control0[j], control1[j]}, where, row, &d);
+      }
+      if (limits.max_speed && speed2.cwiseAbs().maxCoeff() > 0.0) {
+        // Certified speed: Bernstein coefficients of |f'(s(u))|^2 ((1 - u) b0 + u b1).
+        const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
+        SmallPoly w0 = bernstein.Convert(Multiply(speed2, one_minus_u));
+        SmallPoly w1 = bernstein.Convert(Multiply(speed2, u));
+        w0(w0.size() - 1) = 0.0;
+        w1(0) = 0.0;
+        const double s2 = *limits.max_speed * *limits.max_speed;
+        for (int j = 0; j < w0.size(); ++j) {
+          cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / s2, LinearRow::Kind::kVelocity});
+        }
       }
     }
     if (problem.prune_redundant_rows) PruneCellRows(&cell_rows);

@@ -81,6 +81,36 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
     }
     cubic_.push_back(c);
   }
+  cone_.reserve(d.cone_rows.size());
+  for (const ConeRow& row : d.cone_rows) {
+    ConeTerms c;
+    c.t0 = row.bound_constant;
+    c.v0 = row.norm_constant;
+    for (size_t j = 0; j < row.grid.size(); ++j) {
+      const GridValue& g = d.grid[static_cast<size_t>(row.grid[j])];
+      if (g.var < 0) {
+        c.t0 += row.bound[j] * g.fixed;
+        c.v0 += row.norm[j] * g.fixed;
+        continue;
+      }
+      int a = 0;
+      while (a < c.k && c.var[a] != g.var) ++a;
+      if (a == c.k) {
+        if (c.k == 3) throw std::invalid_argument("IpoptTemporalNlp: a cone row over more than three values");
+        c.var[c.k] = g.var;
+        c.beta[c.k].setZero();
+        ++c.k;
+      }
+      c.alpha[a] += row.bound[j] * g.scale;
+      c.beta[a] += row.norm[j] * g.scale;
+    }
+    for (int a = 0; a < c.k; ++a) {
+      for (int b = 0; b < c.k; ++b) {
+        if (c.var[a] >= c.var[b]) keys.push_back(EntryKey(c.var[a], c.var[b]));
+      }
+    }
+    cone_.push_back(c);
+  }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   hess_rows_.reserve(keys.size());
@@ -112,6 +142,15 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
       if (c.jac[j] < 0) c.jac[j] = num_jacobian_entries_++;
       for (int k = 0; k < 3; ++k) {
         if (c.var[k] >= 0 && c.var[j] >= c.var[k]) c.hess[j][k] = index_of(c.var[j], c.var[k]);
+      }
+    }
+  }
+  for (ConeTerms& c : cone_) {
+    c.jac = num_jacobian_entries_;
+    num_jacobian_entries_ += c.k;
+    for (int a = 0; a < c.k; ++a) {
+      for (int b = 0; b < c.k; ++b) {
+        if (c.var[a] >= c.var[b]) c.hess[a][b] = index_of(c.var[a], c.var[b]);
       }
     }
   }
@@ -158,7 +197,7 @@ std::vector<double> IpoptTemporalNlp::StartingPoint() const {
 bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
                                     Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) {
   n = d_.num_vars;
-  m = static_cast<Ipopt::Index>(d_.rows.size() + cubic_.size());
+  m = static_cast<Ipopt::Index>(d_.rows.size() + cubic_.size() + cone_.size());
   nnz_jac_g = num_jacobian_entries_;
   nnz_h_lag = static_cast<Ipopt::Index>(hess_rows_.size());
   index_style = C_STYLE;
@@ -169,7 +208,8 @@ bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt
                                        Ipopt::Index m, Ipopt::Number* g_l,
                                        Ipopt::Number* g_u) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
-  if (n != d_.num_vars || m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
+  const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
+  if (n != d_.num_vars || m != cubic_end + static_cast<Ipopt::Index>(cone_.size())) return false;
   for (Ipopt::Index v = 0; v < n; ++v) {
     x_l[v] = 0.0;
     x_u[v] = IpoptBound(d_.var_upper[static_cast<size_t>(v)]);
@@ -179,9 +219,13 @@ bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt
     g_l[i] = IpoptBound(r.lower);
     g_u[i] = IpoptBound(r.upper);
   }
-  for (Ipopt::Index i = linear; i < m; ++i) {
+  for (Ipopt::Index i = linear; i < cubic_end; ++i) {
     g_l[i] = -kIpoptInfinity;
     g_u[i] = 1.0;
+  }
+  for (Ipopt::Index i = cubic_end; i < m; ++i) {  // t^2 - ||v||^2 >= 0
+    g_l[i] = 0.0;
+    g_u[i] = kIpoptInfinity;
   }
   return true;
 }
@@ -242,7 +286,12 @@ bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool 
 bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
                               Ipopt::Index m, Ipopt::Number* g) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
-  if (m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
+  const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
+  if (m != cubic_end + static_cast<Ipopt::Index>(cone_.size())) return false;
+  for (size_t r = 0; r < cone_.size(); ++r) {
+    const double t = ConeT(cone_[r], x);
+    g[cubic_end + static_cast<Ipopt::Index>(r)] = t * t - ConeV(cone_[r], x).squaredNorm();
+  }
   for (Ipopt::Index i = 0; i < linear; ++i) {
     double value = 0.0;
     for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) value += t.second * x[t.first];
@@ -257,7 +306,21 @@ bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* x,
                                   Ipopt::Index* iRow, Ipopt::Index* jCol,
                                   Ipopt::Number* values) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
-  if (nele_jac != num_jacobian_entries_ || m != linear + static_cast<Ipopt::Index>(cubic_.size())) return false;
+  const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
+  if (nele_jac != num_jacobian_entries_ || m != cubic_end + static_cast<Ipopt::Index>(cone_.size())) return false;
+  for (size_t r = 0; r < cone_.size(); ++r) {
+    const ConeTerms& c = cone_[r];
+    if (values == nullptr) {
+      for (int a = 0; a < c.k; ++a) {
+        iRow[c.jac + a] = cubic_end + static_cast<Ipopt::Index>(r);
+        jCol[c.jac + a] = c.var[a];
+      }
+      continue;
+    }
+    const double t = ConeT(c, x);
+    const Eigen::Vector3d v = ConeV(c, x);
+    for (int a = 0; a < c.k; ++a) values[c.jac + a] = 2.0 * t * c.alpha[a] - 2.0 * c.beta[a].dot(v);
+  }
   for (size_t r = 0; r < cubic_.size(); ++r) {
     const CubicTerms& c = cubic_[r];
     if (values == nullptr) {
@@ -302,9 +365,20 @@ bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
     std::copy(hess_cols_.begin(), hess_cols_.end(), jCol);
     return true;
   }
-  // The linear rows' multipliers do not enter; the cubic rows' do.
+  // The linear rows' multipliers do not enter; the cubic and cone rows' do.
   std::fill(values, values + nele_hess, 0.0);
   const size_t linear = d_.rows.size();
+  for (size_t r = 0; r < cone_.size(); ++r) {
+    const double weight = lambda[linear + cubic_.size() + r];
+    if (weight == 0.0) continue;
+    const ConeTerms& c = cone_[r];
+    for (int a = 0; a < c.k; ++a) {
+      for (int b = 0; b < c.k; ++b) {
+        if (c.hess[a][b] < 0) continue;
+        values[c.hess[a][b]] += weight * 2.0 * (c.alpha[a] * c.alpha[b] - c.beta[a].dot(c.beta[b]));
+      }
+    }
+  }
   for (size_t r = 0; r < cubic_.size(); ++r) {
     const double weight = lambda[linear + r];
     if (weight == 0.0) continue;
@@ -473,7 +547,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
     const Clock::time_point build_start = Clock::now();
     Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
     std::string error;
-    const bool nonlinear = !d.cubic_rows.empty();
+    const bool nonlinear = !d.cubic_rows.empty() || !d.cone_rows.empty();
     const bool ready = EnsureApplication(nonlinear, &error);
     result->build_time_seconds += Seconds(build_start, Clock::now());
     if (!ready) {

@@ -26,6 +26,7 @@
 #include <array>
 #include <vector>
 
+#include <Eigen/Core>
 #include <IpTNLP.hpp>
 
 #include "timeopt/temporal/discretization.h"
@@ -127,9 +128,34 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
   // dc/db_j for the three values.
   static std::array<double, 3> CubicGradient(const CubicRow& r, const std::array<double, 3>& b);
 
+  // One cone row (ConeRow) in x: t = t0 + alpha . x_vars, v = v0 + beta x_vars (3 x k), written as
+  // the smooth q = t^2 - ||v||^2 >= 0 (with t >= 0 from the cone's own linear row or a constant
+  // t): grad q = 2 t alpha - 2 beta' v, Hessian 2 (alpha alpha' - beta' beta), constant.
+  struct ConeTerms {
+    int k = 0;            // distinct free variables
+    int var[3] = {-1, -1, -1};
+    double alpha[3] = {0.0, 0.0, 0.0};
+    Eigen::Vector3d beta[3];
+    double t0 = 0.0;
+    Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
+    int jac = -1;         // its first Jacobian entry (k consecutive ones)
+    int hess[3][3] = {{-1, -1, -1}, {-1, -1, -1}, {-1, -1, -1}};  // (a, b) with var[a] >= var[b]
+  };
+  double ConeT(const ConeTerms& c, const Ipopt::Number* x) const {
+    double t = c.t0;
+    for (int a = 0; a < c.k; ++a) t += c.alpha[a] * x[c.var[a]];
+    return t;
+  }
+  Eigen::Vector3d ConeV(const ConeTerms& c, const Ipopt::Number* x) const {
+    Eigen::Vector3d v = c.v0;
+    for (int a = 0; a < c.k; ++a) v += c.beta[a] * x[c.var[a]];
+    return v;
+  }
+
   const TemporalDiscretization& d_;
   std::vector<CellTerms> cells_;
   std::vector<CubicTerms> cubic_;
+  std::vector<ConeTerms> cone_;
   int num_linear_jacobian_entries_ = 0;
   std::vector<int> hess_rows_, hess_cols_;
   int num_jacobian_entries_ = 0;

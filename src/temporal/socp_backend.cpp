@@ -148,6 +148,23 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
     if (std::isfinite(row.upper)) add_less_equal(row, 1.0, row.upper);
     if (std::isfinite(row.lower)) add_less_equal(row, -1.0, -row.lower);
   }
+  // The quadrotor's norm limits: (bound, norm part) in a second-order cone.
+  std::vector<conic::AffineExpr> soc(4);
+  for (const ConeRow& r : d.cone_rows) {
+    for (conic::AffineExpr& e : soc) {
+      e.terms.clear();
+      e.constant = 0.0;
+    }
+    soc[0].constant = r.bound_constant;
+    for (int i = 0; i < 3; ++i) soc[static_cast<size_t>(i) + 1].constant = r.norm_constant(i);
+    for (size_t j = 0; j < r.grid.size(); ++j) {
+      if (r.bound[j] != 0.0) add_b(r.grid[j], r.bound[j], soc[0]);
+      for (int i = 0; i < 3; ++i) {
+        if (r.norm[j](i) != 0.0) add_b(r.grid[j], r.norm[j](i), soc[static_cast<size_t>(i) + 1]);
+      }
+    }
+    builder.AddSecondOrderCone(soc);
+  }
   return builder.Build();
 }
 

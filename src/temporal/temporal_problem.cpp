@@ -21,6 +21,15 @@ void CheckPositive(double v, const std::string& field) {
   }
 }
 
+// Positive, or +infinity for "no limit on this axis".
+void CheckPositiveOrNone(double v, const std::string& field) {
+  if (std::isnan(v) || !(v > 0.0)) {
+    throw std::invalid_argument(field + ": expected a positive number (or none), got " + Num(v));
+  }
+}
+
+constexpr double kHalfPi = 1.57079632679489661923;
+
 void CheckFinite(const Eigen::Vector3d& v, const std::string& field) {
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(v(a))) {
@@ -63,8 +72,37 @@ void TemporalProblem::Validate() const {
     }
   }
   for (int a = 0; a < 3; ++a) {
-    CheckPositive(limits.max_velocity(a), "limits.max_velocity[" + std::to_string(a) + "]");
-    CheckPositive(limits.max_acceleration(a), "limits.max_acceleration[" + std::to_string(a) + "]");
+    CheckPositiveOrNone(limits.max_velocity(a), "limits.max_velocity[" + std::to_string(a) + "]");
+    CheckPositiveOrNone(limits.max_acceleration(a), "limits.max_acceleration[" + std::to_string(a) + "]");
+  }
+  if (limits.max_speed) CheckPositive(*limits.max_speed, "limits.max_speed");
+  if (limits.max_acceleration_norm) CheckPositive(*limits.max_acceleration_norm, "limits.max_acceleration_norm");
+  if (limits.max_thrust) CheckPositive(*limits.max_thrust, "limits.max_thrust");
+  CheckPositive(limits.gravity, "limits.gravity");
+  if (limits.min_thrust && !(std::isfinite(*limits.min_thrust) && *limits.min_thrust >= 0.0)) {
+    throw std::invalid_argument("limits.min_thrust: expected a finite number >= 0, got " + Num(*limits.min_thrust));
+  }
+  if (limits.max_tilt && !(*limits.max_tilt > 0.0 && *limits.max_tilt < kHalfPi)) {
+    throw std::invalid_argument("limits.max_tilt: expected an angle in (0, pi/2) radians, got " + Num(*limits.max_tilt));
+  }
+  if (limits.min_thrust && limits.max_thrust && *limits.min_thrust > *limits.max_thrust) {
+    throw std::invalid_argument("limits.min_thrust: " + Num(*limits.min_thrust) + " is above limits.max_thrust " +
+                                Num(*limits.max_thrust));
+  }
+  if (limits.max_thrust && *limits.max_thrust < limits.gravity) {
+    throw std::invalid_argument("limits.max_thrust: " + Num(*limits.max_thrust) +
+                                " m/s^2 cannot hold the vehicle against gravity (" + Num(limits.gravity) + ")");
+  }
+  // Something must bound the speed and the acceleration on every axis, or the time has no minimum.
+  if (!limits.max_speed && !limits.max_velocity.allFinite()) {
+    throw std::invalid_argument("limits: the speed is unbounded: give limits.max_velocity on every axis or "
+                                "limits.max_speed");
+  }
+  // (max_tilt alone bounds the horizontal acceleration only: a climbing curve then needs max_thrust
+  // as well, or the time has no minimum and the solver reports it.)
+  if (!limits.max_acceleration_norm && !limits.max_thrust && !limits.max_tilt && !limits.max_acceleration.allFinite()) {
+    throw std::invalid_argument("limits: the acceleration is unbounded: give limits.max_acceleration on every "
+                                "axis, limits.max_acceleration_norm, limits.max_thrust or limits.max_tilt");
   }
   if (limits.max_acceleration_change) {
     CheckPositive(*limits.max_acceleration_change, "limits.max_acceleration_change");
@@ -93,6 +131,11 @@ void TemporalProblem::Validate() const {
     if (limits.max_acceleration_change) {
       throw std::invalid_argument("limits.max_acceleration_change: not used together with "
                                   "limits.max_jerk (the jerk limit bounds the acceleration's change)");
+    }
+    if (limits.HasNormLimits()) {
+      throw std::invalid_argument("limits.max_speed, max_acceleration_norm, max_thrust, min_thrust and "
+                                  "max_tilt are not supported together with limits.max_jerk yet; use the "
+                                  "per-axis limits with a jerk limit");
     }
   }
   if (!(scp_tolerance > 0.0 && scp_tolerance <= 0.1)) {

@@ -82,6 +82,24 @@ struct CubicRow {
   double Value(const std::array<double, 3>& b) const;
 };
 
+// A second-order cone row over grid values, for the quadrotor's norm limits (limits.max_acceleration_norm,
+// max_thrust, max_tilt) on one acceleration vector (a cell middle in paper mode, a Bernstein control
+// point of a cell's acceleration in certified mode):
+//   || norm_constant + sum_j norm[j] b_{grid[j]} || <= bound_constant + sum_j bound[j] b_{grid[j]},
+// scaled so that bound_constant is 1. Written over grid values (b_g, see GridValue), not over x.
+struct ConeRow {
+  enum class Kind { kAccelerationNorm, kThrust, kTilt };
+  Kind kind = Kind::kAccelerationNorm;
+  std::vector<int> grid;
+  std::vector<Eigen::Vector3d> norm;
+  Eigen::Vector3d norm_constant = Eigen::Vector3d::Zero();
+  std::vector<double> bound;
+  double bound_constant = 1.0;
+  // The two sides at the grid values b (one per entry of grid).
+  Eigen::Vector3d NormPart(const std::vector<double>& b) const;
+  double BoundPart(const std::vector<double>& b) const;
+};
+
 struct Cell {
   int piece = 0;
   int first_grid = 0;  // grid index of b^k; b^{k+1} is first_grid + 1
@@ -107,6 +125,7 @@ struct TemporalDiscretization {
   std::vector<LinearRow> rows;             // over x, constants folded into the bounds
   std::vector<JointInfo> joints;           // m - 1 entries
   std::vector<CubicRow> cubic_rows;        // JerkRows::kExact only; <= 1 each
+  std::vector<ConeRow> cone_rows;          // the quadrotor's norm limits (VehicleLimits)
   // Jerk-limited mode (DiscretizeJerkLimited): the grid is the half grid, cells_per_piece = 2 K
   // half cells; shapes holds the shape of each of the m K full cells in path order.
   bool jerk_limited = false;
@@ -122,8 +141,8 @@ struct TemporalDiscretization {
   double GridB(int g, const std::vector<double>& x) const;
   // Objective J and its time part T for x (infinite when a cell has b = 0 at both ends).
   double Objective(const std::vector<double>& x, double* total_time = nullptr) const;
-  // Largest violation of the rows (linear and cubic) and bounds for x (0 when feasible), in the
-  // rows' units.
+  // Largest violation of the rows (linear, cubic and cone) and bounds for x (0 when feasible), in
+  // the rows' units.
   double MaxViolation(const std::vector<double>& x) const;
 };
 

@@ -3,6 +3,7 @@
 // What a temporal solver returns: its status, the backend that produced it, and the result.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,14 @@ struct TemporalResult {
   // |acc_axis| / amax_axis over all axes and a fine sampling of every cell. Set when optimal.
   double max_velocity_ratio = 0.0;
   double max_acceleration_ratio = 0.0;
+  // The quadrotor's limits on the same dense check, each set when its limit is given: the largest
+  // ||v|| / max_speed, ||acc|| / max_acceleration_norm, ||acc + g e3|| / max_thrust, min_thrust /
+  // ||acc + g e3|| (its smallest value) and tilt / max_tilt. Above 1: the limit is exceeded.
+  std::optional<double> max_speed_ratio;
+  std::optional<double> max_acceleration_norm_ratio;
+  std::optional<double> max_thrust_ratio;
+  std::optional<double> min_thrust_ratio;
+  std::optional<double> max_tilt_ratio;
   // Jerk-limited mode: the largest |jerk_axis| / max_jerk_axis on the same dense check (0
   // otherwise), the number of convex solves of the sequential convex programme (the first one
   // jerk-free), and T after each of them (the first one not jerk-feasible; each later one is).
