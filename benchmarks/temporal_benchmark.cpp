@@ -14,6 +14,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
@@ -133,6 +134,23 @@ void BM_SocpJerkLimited(benchmark::State& state) {
   RunProblem(state, TemporalBackend::kSocp, p);
 }
 BENCHMARK(BM_SocpJerkLimited)->Args({10, 50})->Args({5, 30})->Unit(benchmark::kMillisecond);
+
+// The quadrotor's own limits (issue 20) on the same curves, no per-axis limits: max_speed 3,
+// thrust in [g - 3, g + 3], tilt 0.5 rad. Third argument: 0 paper rows, 1 certified (cones on every
+// Bernstein control point). Compare the two, and with BM_Socp (the structured path does not take
+// cones: the conic solver answers).
+void BM_SocpQuadrotor(benchmark::State& state) {
+  TemporalProblem p = MakeProblem(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                                  state.range(2) == 1 ? ConstraintMode::kCertified : ConstraintMode::kPaper);
+  p.limits.max_velocity.setConstant(std::numeric_limits<double>::infinity());
+  p.limits.max_acceleration.setConstant(std::numeric_limits<double>::infinity());
+  p.limits.max_speed = 3.0;
+  p.limits.max_thrust = 9.81 + 3.0;
+  p.limits.min_thrust = 9.81 - 3.0;
+  p.limits.max_tilt = 0.5;
+  RunProblem(state, TemporalBackend::kSocp, p);
+}
+BENCHMARK(BM_SocpQuadrotor)->Args({10, 50, 0})->Args({10, 50, 1})->Unit(benchmark::kMillisecond);
 
 void BM_SocpRho(benchmark::State& s) {
   Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper, 0.1 * static_cast<double>(s.range(2)));

@@ -5,6 +5,7 @@
 // Exit codes: 0 success, 2 invalid input or unreadable file, 3 infeasible, 1 anything else.
 
 #include <functional>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
@@ -45,6 +46,16 @@ inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {
 int ExitCodeFor(TemporalStatus status);
 int ExitCodeFor(PlanStatus status);
 int ExitCodeFor(conic::Status status);
+
+// The quadrotor's own limits as options (--max-speed, --max-acceleration-norm, --max-thrust,
+// --min-thrust, --max-tilt), shared by waypoints, plan and simulate (quadrotor_options.cpp). Each
+// given one overrides the problem's; a negative or non-finite value is invalid input (named).
+struct QuadrotorLimitArgs {
+  std::optional<double> max_speed, max_acceleration_norm, max_thrust, min_thrust, max_tilt;
+  bool any() const { return max_speed || max_acceleration_norm || max_thrust || min_thrust || max_tilt; }
+};
+void AddQuadrotorLimitOptions(CLI::App* sub, QuadrotorLimitArgs* args);
+void ApplyQuadrotorLimits(const QuadrotorLimitArgs& args, VehicleLimits* limits);
 
 using Runner = std::function<int()>;
 

@@ -44,6 +44,7 @@ struct PlanArgs {
   std::string map, start, goal, config, output, plot;
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
+  QuadrotorLimitArgs quadrotor;  // in addition to the per-axis limits the planner needs
 };
 
 Eigen::Vector3d ParsePoint(const std::string& text, const std::string& name) {
@@ -84,6 +85,7 @@ int RunPlan(PlanArgs args) {
     if (*args.max_jerk > 0.0) options.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
     else options.limits.max_jerk.reset();
   }
+  ApplyQuadrotorLimits(args.quadrotor, &options.limits);
   if (args.robot_radius) options.robot_radius = *args.robot_radius;
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("options: " + error);
@@ -114,6 +116,14 @@ int RunPlan(PlanArgs args) {
   summary["limits"] = {{"max_velocity", per_axis(options.limits.max_velocity)},
                        {"max_acceleration", per_axis(options.limits.max_acceleration)},
                        {"max_jerk", options.limits.max_jerk ? per_axis(*options.limits.max_jerk) : Json(nullptr)}};
+  const auto norm_limit = [&](const char* key, const std::optional<double>& value) {
+    if (value) summary["limits"][key] = *value;
+  };
+  norm_limit("max_speed", options.limits.max_speed);
+  norm_limit("max_acceleration_norm", options.limits.max_acceleration_norm);
+  norm_limit("max_thrust", options.limits.max_thrust);
+  norm_limit("min_thrust", options.limits.min_thrust);
+  norm_limit("max_tilt", options.limits.max_tilt);
   for (const auto& item : result.items()) summary[item.key()] = item.value();
   summary["time_ms"]["esdf"] = esdf_ms;
   const bool ok = plan.is_success();
@@ -127,6 +137,14 @@ int RunPlan(PlanArgs args) {
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},
                            {"max_position_error", flight.max_position_error}};
+      const auto flight_ratio = [&](const char* key, const std::optional<double>& value) {
+        if (value) summary["flight"][key] = *value;
+      };
+      flight_ratio("max_speed_ratio", flight.max_speed_ratio);
+      flight_ratio("max_acceleration_norm_ratio", flight.max_acceleration_norm_ratio);
+      flight_ratio("max_thrust_ratio", flight.max_thrust_ratio);
+      flight_ratio("min_thrust_ratio", flight.min_thrust_ratio);
+      flight_ratio("max_tilt_ratio", flight.max_tilt_ratio);
       if (options.limits.max_jerk) summary["flight"]["tolerance"] = kJerkLimitedFlightTolerance;
       if (!flight.feasible && !options.limits.max_jerk) summary["flight"]["note"] = kFlightNote;
     } catch (const std::invalid_argument& e) {
@@ -178,6 +196,9 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
                   "Per-axis jerk limit, m/s^3 (0: none, the paper's profile)" +
                       (defaults.limits.max_jerk ? shown(defaults.limits.max_jerk->x()) : std::string()))
       ->check(CLI::NonNegativeNumber);
+  // The quadrotor's limits apply with the per-axis ones (the front end and the spatial stage size
+  // the path by those); not yet together with a jerk limit (use --max-jerk 0).
+  AddQuadrotorLimitOptions(sub, &args->quadrotor);
   sub->add_option("--robot-radius", args->robot_radius,
                   "Robot radius, metres" + shown(defaults.robot_radius))
       ->check(CLI::NonNegativeNumber);

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 #include <memory>
 #include <optional>
@@ -44,6 +45,7 @@ struct SimulateArgs {
   // Relative slack of the verdict. Unset: rounding only (1e-9), or 1% for a problem with a jerk
   // limit (the 1 kHz controller lags a continuous reference by a little).
   std::optional<double> tolerance;
+  QuadrotorLimitArgs quadrotor;  // override the problem's (or, with --samples, add to the per-axis ones)
   std::string output;
   std::string states;
 };
@@ -52,8 +54,11 @@ int RunSimulate(const SimulateArgs& args) {
   if (args.problem.empty() == args.samples.empty()) {
     throw std::invalid_argument("give either PROBLEM.json or --samples TRAJ.csv");
   }
-  if (!args.samples.empty() && !(args.max_velocity > 0.0 && args.max_acceleration > 0.0)) {
-    throw std::invalid_argument("--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis)");
+  if (!args.samples.empty() && !((args.max_velocity > 0.0 || args.quadrotor.max_speed) &&
+                                  (args.max_acceleration > 0.0 || args.quadrotor.max_acceleration_norm ||
+                                   args.quadrotor.max_thrust))) {
+    throw std::invalid_argument("--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis), or "
+                                "--max-speed and --max-acceleration-norm or --max-thrust");
   }
   if (!args.samples.empty() && args.max_jerk) {
     throw std::invalid_argument("--max-jerk sets the problem's jerk limit, so it needs PROBLEM.json; for the "
@@ -87,8 +92,10 @@ int RunSimulate(const SimulateArgs& args) {
       // Another planner's trajectory: the vehicle starts in its first sample.
       const std::vector<TrajectoryState> samples = ReadSamplesCsv(args.samples);
       TemporalLimits limits;
-      limits.max_velocity.setConstant(args.max_velocity);
-      limits.max_acceleration.setConstant(args.max_acceleration);
+      constexpr double kNone = std::numeric_limits<double>::infinity();
+      limits.max_velocity.setConstant(args.max_velocity > 0.0 ? args.max_velocity : kNone);
+      limits.max_acceleration.setConstant(args.max_acceleration > 0.0 ? args.max_acceleration : kNone);
+      ApplyQuadrotorLimits(args.quadrotor, &limits);
       const double duration = samples.back().t - samples.front().t;
       report = sim.Run(SampledReference(samples), duration, limits);
       json["samples"] = static_cast<int>(samples.size());
@@ -99,6 +106,8 @@ int RunSimulate(const SimulateArgs& args) {
         if (*args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
         else problem.limits.max_jerk.reset();
       }
+      ApplyQuadrotorLimits(args.quadrotor, &problem.limits);
+      problem.Validate();
       TemporalBackend backend = TemporalBackend::kSocp;
       if (!FromString(args.solver, &backend)) {
         throw std::invalid_argument("--solver: expected " + EnumChoices(kTemporalBackends));
@@ -176,6 +185,7 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
                   "The vehicle's own jerk limit per axis, m/s^3: commands beyond it are clipped (0: none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  AddQuadrotorLimitOptions(sub, &args->quadrotor);
   sub->add_option("--tolerance", args->tolerance,
                   "Relative slack of the verdict (default: rounding only, or 0.01 for a problem with "
                   "limits.max_jerk)")

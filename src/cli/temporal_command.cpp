@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -92,13 +94,49 @@ int RunTemporal(const TemporalArgs& args) {
   return exit_code;
 }
 
+// "max_velocity 2 m/s, max_acceleration 1 m/s^2, max_speed 3 m/s, " for the limits that are set.
+std::string LimitsLine(const VehicleLimits& l) {
+  std::ostringstream ss;
+  if (l.max_velocity.allFinite()) ss << "max_velocity " << l.max_velocity.x() << " m/s, ";
+  if (l.max_acceleration.allFinite()) ss << "max_acceleration " << l.max_acceleration.x() << " m/s^2, ";
+  if (l.max_speed) ss << "max_speed " << *l.max_speed << " m/s, ";
+  if (l.max_acceleration_norm) ss << "max_acceleration_norm " << *l.max_acceleration_norm << " m/s^2, ";
+  if (l.max_thrust) ss << "max_thrust " << *l.max_thrust << " m/s^2, ";
+  if (l.min_thrust) ss << "min_thrust " << *l.min_thrust << " m/s^2, ";
+  if (l.max_tilt) ss << "max_tilt " << *l.max_tilt << " rad, ";
+  return ss.str();
+}
+
+// ", max ||v||/max_speed: 1, ..." for the quadrotor limits given.
+std::string QuadrotorRatios(const TemporalResult& r) {
+  std::ostringstream ss;
+  if (r.max_speed_ratio) ss << ", max ||v||/max_speed: " << *r.max_speed_ratio;
+  if (r.max_acceleration_norm_ratio) ss << ", max ||a||/max_acceleration_norm: " << *r.max_acceleration_norm_ratio;
+  if (r.max_thrust_ratio) ss << ", max thrust/max_thrust: " << *r.max_thrust_ratio;
+  if (r.min_thrust_ratio) ss << ", min_thrust/min thrust: " << *r.min_thrust_ratio;
+  if (r.max_tilt_ratio) ss << ", max tilt/max_tilt: " << *r.max_tilt_ratio;
+  return ss.str();
+}
+
+// The same for a flight's report.
+std::string FlightQuadrotorRatios(const FeasibilityReport& f) {
+  std::ostringstream ss;
+  if (f.max_speed_ratio) ss << ", max ||v||/max_speed " << *f.max_speed_ratio;
+  if (f.max_acceleration_norm_ratio) ss << ", max ||a||/max_acceleration_norm " << *f.max_acceleration_norm_ratio;
+  if (f.max_thrust_ratio) ss << ", max thrust/max_thrust " << *f.max_thrust_ratio;
+  if (f.min_thrust_ratio) ss << ", min_thrust/min thrust " << *f.min_thrust_ratio;
+  if (f.max_tilt_ratio) ss << ", max tilt/max_tilt " << *f.max_tilt_ratio;
+  return ss.str();
+}
+
 // Defaults are the library's (a default TemporalProblem), never restated here.
 struct WaypointsArgs {
   std::string waypoints;
   std::string kind = "minjerk";
-  double max_velocity = TemporalProblem().limits.max_velocity.x();
-  double max_acceleration = TemporalProblem().limits.max_acceleration.x();
+  // Unset: the library's default, or none when a quadrotor limit bounds the same quantity.
+  std::optional<double> max_velocity, max_acceleration;
   double max_jerk = 0.0;  // 0: none (the paper's profile)
+  QuadrotorLimitArgs quadrotor;
   int K = TemporalProblem().cells_per_piece;
   double rho = TemporalProblem().rho;
   std::string solver = ToString(TemporalBackend::kSocp);
@@ -111,8 +149,14 @@ int RunWaypoints(const WaypointsArgs& args) {
   const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
   TemporalProblem problem;
   problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
-  problem.limits.max_velocity = Eigen::Vector3d::Constant(args.max_velocity);
-  problem.limits.max_acceleration = Eigen::Vector3d::Constant(args.max_acceleration);
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  const QuadrotorLimitArgs& q = args.quadrotor;
+  const double default_v = TemporalProblem().limits.max_velocity.x();
+  const double default_a = TemporalProblem().limits.max_acceleration.x();
+  problem.limits.max_velocity.setConstant(args.max_velocity.value_or(q.max_speed ? kNone : default_v));
+  problem.limits.max_acceleration.setConstant(args.max_acceleration.value_or(
+      q.max_acceleration_norm || q.max_thrust || q.max_tilt ? kNone : default_a));
+  ApplyQuadrotorLimits(q, &problem.limits);
   if (args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   problem.cells_per_piece = args.K;
   problem.rho = args.rho;
@@ -142,7 +186,7 @@ int RunWaypoints(const WaypointsArgs& args) {
                                                    problem.boundary.start_acceleration);
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
-          << ", max |a|/amax " << flight.max_acceleration_ratio << " ("
+          << ", max |a|/amax " << flight.max_acceleration_ratio << FlightQuadrotorRatios(flight) << " ("
           << (flight.feasible ? "limits hold" : "limits exceeded")
           << (problem.limits.max_jerk ? " within 1%" : "") << "; see `timeopt simulate`)";
     if (!flight.feasible && !problem.limits.max_jerk) flown << "\n  note: " << kFlightNote;
@@ -153,8 +197,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
             << problem.curve.ArcLength(1e-9) << " m)\n"
-            << "limits: max_velocity " << args.max_velocity << " m/s, max_acceleration "
-            << args.max_acceleration << " m/s^2, "
+            << "limits: " << LimitsLine(problem.limits)
             << (args.max_jerk > 0.0 ? "max_jerk " + std::to_string(args.max_jerk) + " m/s^3, " : std::string())
             << "K " << args.K << ", rho " << args.rho << ", "
             << args.constraint_mode << " constraints\n"
@@ -162,7 +205,7 @@ int RunWaypoints(const WaypointsArgs& args) {
             << result.solve_time_seconds * 1e3 << " ms\n"
             << "total_time: " << result.total_time << " s\n"
             << "max |v|/vmax along the trajectory: " << result.max_velocity_ratio
-            << ", max |a|/amax: " << result.max_acceleration_ratio << "\n"
+            << ", max |a|/amax: " << result.max_acceleration_ratio << QuadrotorRatios(result) << "\n"
             << flown.str() << "\n"
             << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
             << ", " << (dir / "samples.csv").string() << ", " << (dir / "profile.png").string()
@@ -201,12 +244,16 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
   sub->add_option("--kind", args->kind, "cubic or minjerk (rest to rest)")
       ->check(CLI::IsMember({"cubic", "minjerk"}))
       ->capture_default_str();
-  sub->add_option("--max-velocity", args->max_velocity, "Per-axis velocity limit, m/s")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  sub->add_option("--max-acceleration", args->max_acceleration, "Per-axis acceleration limit, m/s^2")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  sub->add_option("--max-velocity", args->max_velocity,
+                  "Per-axis velocity limit, m/s (default " + std::to_string(TemporalProblem().limits.max_velocity.x()) +
+                      "; none when --max-speed is given)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--max-acceleration", args->max_acceleration,
+                  "Per-axis acceleration limit, m/s^2 (default " +
+                      std::to_string(TemporalProblem().limits.max_acceleration.x()) +
+                      "; none when --max-acceleration-norm, --max-thrust or --max-tilt is given)")
+      ->check(CLI::PositiveNumber);
+  AddQuadrotorLimitOptions(sub, &args->quadrotor);
   sub->add_option("--max-jerk", args->max_jerk,
                   "Per-axis jerk limit, m/s^3: a jerk-limited profile with continuous acceleration "
                   "(0: none, the paper's profile)")

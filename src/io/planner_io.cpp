@@ -203,6 +203,15 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
   j["spatial_iterations"] = static_cast<int>(plan.spatial.iterations.size());
   j["max_velocity_ratio"] = value_if(ok, plan.temporal.max_velocity_ratio);
   j["max_acceleration_ratio"] = value_if(ok, plan.temporal.max_acceleration_ratio);
+  // The quadrotor's limits, for the ones given.
+  const auto ratio = [&](const char* key, const std::optional<double>& value) {
+    if (value) j[key] = value_if(ok, *value);
+  };
+  ratio("max_speed_ratio", plan.temporal.max_speed_ratio);
+  ratio("max_acceleration_norm_ratio", plan.temporal.max_acceleration_norm_ratio);
+  ratio("max_thrust_ratio", plan.temporal.max_thrust_ratio);
+  ratio("min_thrust_ratio", plan.temporal.min_thrust_ratio);
+  ratio("max_tilt_ratio", plan.temporal.max_tilt_ratio);
   j["time_ms"] = {{"search", plan.times.search_ms},
                   {"spatial", plan.times.spatial_ms},
                   {"check", plan.times.check_ms},

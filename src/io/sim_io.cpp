@@ -17,6 +17,14 @@ std::string FeasibilityReportToJson(const FeasibilityReport& report, int indent)
   j["max_acceleration_time"] = report.max_acceleration_time;
   j["max_jerk"] = report.max_jerk;
   j["max_jerk_ratio"] = report.max_jerk_ratio;
+  const auto ratio = [&](const char* key, const std::optional<double>& value) {
+    if (value) j[key] = *value;
+  };
+  ratio("max_speed_ratio", report.max_speed_ratio);
+  ratio("max_acceleration_norm_ratio", report.max_acceleration_norm_ratio);
+  ratio("max_thrust_ratio", report.max_thrust_ratio);
+  ratio("min_thrust_ratio", report.min_thrust_ratio);
+  ratio("max_tilt_ratio", report.max_tilt_ratio);
   j["clipped_steps"] = report.clipped_steps;
   j["max_position_error"] = report.max_position_error;
   j["max_position_error_time"] = report.max_position_error_time;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -96,11 +97,14 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   if (!(duration >= 0.0 && std::isfinite(duration))) {
     throw std::invalid_argument("QuadrotorSim::Run: duration must be >= 0 and finite");
   }
-  if (!PositiveFinite(limits.max_velocity)) {
-    throw std::invalid_argument("QuadrotorSim::Run: limits.max_velocity must be positive and finite");
+  // Per-axis limits may be +infinity (none on that axis) when the quadrotor's norms bound the flight.
+  const auto positive = [](const Eigen::Vector3d& v) { return (v.array() > 0.0).all(); };
+  if (!positive(limits.max_velocity) || (!limits.max_velocity.allFinite() && !limits.max_speed)) {
+    throw std::invalid_argument("QuadrotorSim::Run: limits.max_velocity must be positive (and finite unless "
+                                "max_speed is given)");
   }
-  if (!PositiveFinite(limits.max_acceleration)) {
-    throw std::invalid_argument("QuadrotorSim::Run: limits.max_acceleration must be positive and finite");
+  if (!positive(limits.max_acceleration)) {
+    throw std::invalid_argument("QuadrotorSim::Run: limits.max_acceleration must be positive");
   }
   const double dt = options_.time_step;
   const double flight = duration + options_.settle_time;
@@ -161,6 +165,25 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
       acceleration_axis = axis;
     }
   };
+  // The quadrotor's limits over one step from (v, a) with jerk u held for h (h = 0: the point).
+  const bool quadrotor = limits.HasNormLimits();
+  const Eigen::Vector3d up(0.0, 0.0, limits.gravity);
+  double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, tilt = 0.0;
+  double thrust_min = std::numeric_limits<double>::infinity();
+  const auto note_quadrotor = [&](const Eigen::Vector3d& v0, const Eigen::Vector3d& a0, const Eigen::Vector3d& u0,
+                                  double h) {
+    if (!quadrotor) return;
+    const Eigen::Vector3d a1 = a0 + u0 * h;
+    speed = std::max({speed, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(),
+                      (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
+    acc_norm = std::max({acc_norm, a0.norm(), a1.norm()});
+    const Eigen::Vector3d w0 = a0 + up, w1 = a1 + up;
+    thrust_max = std::max({thrust_max, w0.norm(), w1.norm()});
+    const double uu = u0.squaredNorm();
+    const double tau = uu > 0.0 ? std::clamp(-w0.dot(u0) / uu, 0.0, h) : 0.0;
+    thrust_min = std::min({thrust_min, (w0 + u0 * tau).norm(), w1.norm()});
+    tilt = std::max({tilt, std::atan2(w0.head<2>().norm(), w0(2)), std::atan2(w1.head<2>().norm(), w1(2))});
+  };
   bool diverged = false;
   if (options_.record_states) report.states.reserve(static_cast<size_t>(steps) + 1);
   for (int k = 0; k <= steps; ++k) {
@@ -183,6 +206,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
         note_velocity(std::abs(v[i]) / limits.max_velocity[i], t, i);
         note_acceleration(std::abs(a[i]) / limits.max_acceleration[i], t, i);
       }
+      note_quadrotor(v, a, Eigen::Vector3d::Zero(), 0.0);
       if (options_.record_states) report.states.push_back({t, p, v, a, Eigen::Vector3d::Zero(), p - r.position});
       break;
     }
@@ -210,6 +234,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
       note_acceleration(std::max(std::abs(a[i]), std::abs(a1)) / limits.max_acceleration[i],
                         std::abs(a1) > std::abs(a[i]) ? t + dt : t, i);
     }
+    note_quadrotor(v, a, u, dt);
     // Exact integration of the triple integrator over the step with u held.
     p += dt * (v + dt * (0.5 * a + dt * u / 6.0));
     v += dt * (a + 0.5 * dt * u);
@@ -219,7 +244,28 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   const double bound = 1.0 + options_.limit_tolerance;
   const bool velocity_ok = report.max_velocity_ratio <= bound;
   const bool acceleration_ok = report.max_acceleration_ratio <= bound;
-  report.feasible = velocity_ok && acceleration_ok && !diverged;
+  if (limits.max_speed) report.max_speed_ratio = speed / *limits.max_speed;
+  if (limits.max_acceleration_norm) report.max_acceleration_norm_ratio = acc_norm / *limits.max_acceleration_norm;
+  if (limits.max_thrust) report.max_thrust_ratio = thrust_max / *limits.max_thrust;
+  if (limits.min_thrust) {
+    report.min_thrust_ratio = thrust_min > 0.0 ? *limits.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
+  }
+  if (limits.max_tilt) report.max_tilt_ratio = tilt / *limits.max_tilt;
+  std::string quadrotor_failed;
+  const auto check_quadrotor = [&](const std::optional<double>& ratio, const char* name) {
+    if (ratio && !(*ratio <= bound)) {
+      std::ostringstream m;
+      m.precision(10);
+      m << (quadrotor_failed.empty() ? "" : "; ") << name << " ratio reaches " << *ratio;
+      quadrotor_failed += m.str();
+    }
+  };
+  check_quadrotor(report.max_speed_ratio, "max_speed");
+  check_quadrotor(report.max_acceleration_norm_ratio, "max_acceleration_norm");
+  check_quadrotor(report.max_thrust_ratio, "max_thrust");
+  check_quadrotor(report.min_thrust_ratio, "min_thrust");
+  check_quadrotor(report.max_tilt_ratio, "max_tilt");
+  report.feasible = velocity_ok && acceleration_ok && quadrotor_failed.empty() && !diverged;
   std::ostringstream message;
   message.precision(10);
   if (diverged) {
@@ -229,7 +275,8 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
     report.message = message.str();
     return report;
   }
-  if (report.feasible) message << "velocity and acceleration limits hold";
+  if (report.feasible) message << (quadrotor ? "every limit holds" : "velocity and acceleration limits hold");
+  if (!quadrotor_failed.empty()) message << quadrotor_failed << (velocity_ok && acceleration_ok ? "" : "; ");
   if (!velocity_ok) {
     message << "|v_" << AxisName(velocity_axis) << "| reaches " << report.max_velocity_ratio
             << " x max_velocity at t = " << report.max_velocity_time << " s";

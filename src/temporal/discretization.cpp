@@ -527,6 +527,34 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
   if (limits.min_thrust) add_vertical(*limits.min_thrust - g, "limits.min_thrust (acc_z + gravity)");
 }
 
+// The vehicle starts and ends in its boundary states: their accelerations must meet the
+// quadrotor's limits (a hover with min_thrust above gravity cannot), or nothing can.
+void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscretization* d) {
+  const TemporalLimits& l = problem.limits;
+  if (!l.HasNormLimits()) return;
+  const auto check = [&](const Eigen::Vector3d& acc, const char* field) {
+    const Eigen::Vector3d thrust = acc + Eigen::Vector3d(0.0, 0.0, l.gravity);
+    std::ostringstream ss;
+    if (l.min_thrust && thrust(2) < *l.min_thrust - kConstantRowSlack * std::max(1.0, *l.min_thrust)) {
+      ss << "limits.min_thrust (" << *l.min_thrust << " m/s^2) cannot hold at " << field << " (" << acc.transpose()
+         << " m/s^2: vertical thrust " << thrust(2) << ")";
+    } else if (l.max_thrust && thrust.norm() > *l.max_thrust * (1.0 + kConstantRowSlack)) {
+      ss << "limits.max_thrust (" << *l.max_thrust << " m/s^2) is exceeded at " << field << " (thrust " << thrust.norm() << ")";
+    } else if (l.max_acceleration_norm && acc.norm() > *l.max_acceleration_norm * (1.0 + kConstantRowSlack)) {
+      ss << "limits.max_acceleration_norm (" << *l.max_acceleration_norm << ") is exceeded at " << field << " ("
+         << acc.norm() << ")";
+    } else if (l.max_tilt && std::atan2(thrust.head<2>().norm(), thrust(2)) > *l.max_tilt * (1.0 + kConstantRowSlack)) {
+      ss << "limits.max_tilt (" << *l.max_tilt << " rad) is exceeded at " << field << " (tilt "
+         << std::atan2(thrust.head<2>().norm(), thrust(2)) << " rad)";
+    } else {
+      return;
+    }
+    if (!d->infeasible_reason) d->infeasible_reason = ss.str();
+  };
+  check(problem.boundary.start_acceleration, "boundary.start_acceleration");
+  check(problem.boundary.end_acceleration, "boundary.end_acceleration");
+}
+
 // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on
 // (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
 // rows and by the acceleration-change rows in both modes. Also sets acceleration_norm_scale.
@@ -748,6 +776,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
   d.grid.resize(static_cast<size_t>(m) * static_cast<size_t>(K + 1));
 
   ClassifyJoints(problem, &d);
+  CheckBoundaryAccelerations(problem, &d);
   const std::vector<Eigen::Vector3d> grid_tangent = AssignGridValues(problem, &d);
   MakeCells(problem, &d);
   RowBuilder row(d);

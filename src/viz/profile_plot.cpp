@@ -34,6 +34,7 @@ void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limi
 
   PlotPanel speed_panel{"speed |v|", "t [s]", "m/s", {}, false};
   speed_panel.series.push_back(PlotSeries{"|v|", t, speed, {0.1, 0.1, 0.1}, false});
+  if (limits.max_speed) speed_panel.series.push_back(limit_series(*limits.max_speed, "max_speed", {0.4, 0.4, 0.4}));
   PlotPanel vel_panel{"velocity per axis (dashed: +-max_velocity)", "t [s]", "m/s", {}, false};
   PlotPanel acc_panel{"acceleration per axis (dashed: +-max_acceleration)", "t [s]", "m/s^2", {}, false};
   for (int axis = 0; axis < 3; ++axis) {
@@ -44,12 +45,13 @@ void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limi
     const bool same_v = axis > 0 && limits.max_velocity(axis) == limits.max_velocity(0);
     const bool same_a = axis > 0 && limits.max_acceleration(axis) == limits.max_acceleration(0);
     const std::array<double, 3> grey = {0.4, 0.4, 0.4};
-    if (!same_v) {
+    // No line for an axis without a per-axis limit (+infinity: the quadrotor's norms bound it).
+    if (!same_v && std::isfinite(limits.max_velocity(axis))) {
       const auto rgb = limits.max_velocity.isConstant(limits.max_velocity(0)) ? grey : colors[axis];
       vel_panel.series.push_back(limit_series(limits.max_velocity(axis), "", rgb));
       vel_panel.series.push_back(limit_series(-limits.max_velocity(axis), "", rgb));
     }
-    if (!same_a) {
+    if (!same_a && std::isfinite(limits.max_acceleration(axis))) {
       const auto rgb =
           limits.max_acceleration.isConstant(limits.max_acceleration(0)) ? grey : colors[axis];
       acc_panel.series.push_back(limit_series(limits.max_acceleration(axis), "", rgb));

@@ -272,5 +272,33 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_THAT(r.output, HasSubstr("--control-rate must be at least 10 x --bandwidth"));
 }
 
+// The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
+// --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
+// JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or
+// the limit.
+TEST_F(CliTest, QuadrotorLimitsOnTheCommandLine) {
+  const std::string waypoints = std::string(TIMEOPT_SOURCE_DIR) + "/examples/waypoints.csv";
+  CliRun r = RunCli("waypoints " + waypoints + " --max-speed 2.5 --max-thrust 12 --min-thrust 8 --max-tilt 0.4 "
+                    "-K 30 --constraint-mode certified --out-dir " + Path("wq"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("max_speed 2.5 m/s"));
+  const std::string json = ReadTextFile(Path("wq/result.json"));
+  for (const char* key : {"max_speed_ratio", "max_thrust_ratio", "min_thrust_ratio", "max_tilt_ratio"}) {
+    EXPECT_LE(JsonNumber(json, key), 1.0 + 1e-6) << key;
+    EXPECT_GT(JsonNumber(json, key), 0.5) << key;
+  }
+  r = RunCli("waypoints " + waypoints + " --max-speed -1 --out-dir " + Path("wq2"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("--max-speed"));
+  const std::string line = std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json";
+  r = RunCli("simulate " + line + " --max-tilt 2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("limits.max_tilt"));
+  // A limit the boundary already breaks: a hover cannot hold min_thrust above g.
+  r = RunCli("simulate " + line + " --min-thrust 10.5");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("limits.min_thrust"));
+}
+
 }  // namespace
 }  // namespace timeopt

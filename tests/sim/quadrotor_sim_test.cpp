@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -11,6 +12,7 @@
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/temporal/temporal_solver.h"
+#include "timeopt/trajectory/trajectory.h"
 
 namespace timeopt {
 namespace {
@@ -324,6 +326,53 @@ TEST(QuadrotorSim, RejectsBadOptionsAndInputs) {
     FAIL() << "expected std::invalid_argument";
   } catch (const std::invalid_argument& e) {
     EXPECT_THAT(e.what(), HasSubstr("more than 1e8 steps"));
+  }
+}
+
+// The quadrotor's limits in the report against the recorded states (an independent pass over the
+// same flight): acceleration norm, largest thrust and tilt are convex or quasi-convex along a step,
+// so their largest values are at step ends, exactly the recorded states' (to rounding, 1e-12); the
+// smallest thrust may fall inside a step (at most the states' smallest), and the speed is checked
+// at step ends and middles (at least the states' largest, within |jerk| dt^2 / 8 above it).
+TEST(QuadrotorSim, QuadrotorLimitsMatchTheRecordedStates) {
+  TemporalProblem p;
+  p.curve = MinimumJerkSpline((Waypoints(3, 3) << 0, 3, 6, 0, 2, 0, 0, 1, 2).finished());
+  p.limits.max_velocity.setConstant(std::numeric_limits<double>::infinity());
+  p.limits.max_acceleration.setConstant(std::numeric_limits<double>::infinity());
+  p.limits.max_speed = 2.0;
+  p.limits.max_acceleration_norm = 1.5;
+  p.limits.max_thrust = 11.0;
+  p.limits.min_thrust = 8.5;
+  p.limits.max_tilt = 0.3;
+  p.cells_per_piece = 30;
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_TRUE(r.is_success()) << r.message;
+  QuadrotorSimOptions options;
+  options.record_states = true;
+  const FeasibilityReport f =
+      QuadrotorSim(options).Fly(Trajectory(p.curve, r.profile), p.limits, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  ASSERT_TRUE(f.max_speed_ratio && f.max_acceleration_norm_ratio && f.max_thrust_ratio && f.min_thrust_ratio &&
+              f.max_tilt_ratio);
+  double speed = 0.0, acc = 0.0, thrust_max = 0.0, thrust_min = 1e300, tilt = 0.0, jerk = 0.0;
+  for (const SimState& s : f.states) {
+    const Eigen::Vector3d w = s.acceleration + Eigen::Vector3d(0.0, 0.0, 9.81);
+    speed = std::max(speed, s.velocity.norm());
+    acc = std::max(acc, s.acceleration.norm());
+    thrust_max = std::max(thrust_max, w.norm());
+    thrust_min = std::min(thrust_min, w.norm());
+    tilt = std::max(tilt, std::atan2(w.head<2>().norm(), w(2)));
+    jerk = std::max(jerk, s.jerk.norm());
+  }
+  EXPECT_NEAR(*f.max_acceleration_norm_ratio, acc / 1.5, 1e-12);
+  EXPECT_NEAR(*f.max_thrust_ratio, thrust_max / 11.0, 1e-12);
+  EXPECT_NEAR(*f.max_tilt_ratio, tilt / 0.3, 1e-12);
+  EXPECT_GE(*f.min_thrust_ratio, 8.5 / thrust_min - 1e-12);
+  EXPECT_GE(*f.max_speed_ratio, speed / 2.0 - 1e-12);
+  EXPECT_LE(*f.max_speed_ratio, (speed + jerk * 1e-6 / 8.0) / 2.0 + 1e-12);
+  // The paper's profile steps its acceleration, so the vehicle overshoots some of them a little;
+  // the verdict names the ones that failed.
+  if (!f.feasible) {
+    EXPECT_THAT(f.message, HasSubstr("ratio reaches"));
   }
 }
 

@@ -192,11 +192,12 @@ TEST(QuadrotorLimits, BadLimitsAreNamed) {
     EXPECT_EQ(r.status, TemporalStatus::kInvalidInput) << b.limits;
     EXPECT_THAT(r.message, HasSubstr(b.field)) << b.limits;
   }
-  // A hover start that min_thrust above g makes impossible: the start is at rest, so the first
-  // cell's acceleration must point up by min_thrust - g, which a rest-to-rest flight along x
-  // cannot: infeasible, not invalid.
+  // A hover start that min_thrust above g makes impossible (the vehicle starts with thrust g):
+  // infeasible, not invalid, naming the limit and the boundary state.
   const TemporalResult r = solve_with(R"({"max_speed": 2, "max_acceleration_norm": 5, "min_thrust": 10.5})");
   EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
+  EXPECT_THAT(r.message, HasSubstr("limits.min_thrust"));
+  EXPECT_THAT(r.message, HasSubstr("boundary.start_acceleration"));
 }
 
 }  // namespace

@@ -71,8 +71,8 @@ struct SimState {
 };
 
 struct FeasibilityReport {
-  /// True iff the largest velocity and acceleration ratios are <= 1 + limit_tolerance and the flight
-  /// stayed finite. (A jerk limit is the vehicle's: commands are clipped to it, so it always holds;
+  /// True iff the largest velocity and acceleration ratios (and the quadrotor limits' ratios, for
+  /// those given) are <= 1 + limit_tolerance and the flight stayed finite. (A jerk limit is the vehicle's: commands are clipped to it, so it always holds;
   /// see clipped_steps.)
   bool feasible = false;
   /// The failed limits with their largest ratio, axis and time, or "velocity and acceleration
@@ -85,6 +85,16 @@ struct FeasibilityReport {
   /// Largest |a_axis(t)| / max_acceleration(axis) over the whole flight (exact), and when.
   double max_acceleration_ratio = 0.0;
   double max_acceleration_time = 0.0;
+  /// The quadrotor's limits (VehicleLimits::max_speed ...), each set when the limit is given: the
+  /// largest ||v|| / max_speed (at step ends and middles: within |jerk| dt^2 / 8 of exact),
+  /// ||a|| / max_acceleration_norm, ||a + g e3|| / max_thrust, min_thrust / ||a + g e3|| and
+  /// tilt / max_tilt (exact: a is linear over a step, the first three are convex along it and the
+  /// tilt quasi-convex, and the smallest thrust is found in closed form).
+  std::optional<double> max_speed_ratio;
+  std::optional<double> max_acceleration_norm_ratio;
+  std::optional<double> max_thrust_ratio;
+  std::optional<double> min_thrust_ratio;
+  std::optional<double> max_tilt_ratio;
   /// Largest |u_axis| / max_jerk(axis) before clipping (> 1 means the jerk limit clipped a command);
   /// 0 without a jerk limit. Largest |u_axis| applied, m/s^3.
   double max_jerk_ratio = 0.0;
