@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -172,5 +173,15 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
 void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
 // Keeps, per variable, only the tightest row that bounds it alone, as its upper bound.
 void KeepTightestUpperBounds(TemporalDiscretization* d);
+// The largest acceleration norm the quadrotor's limits allow (infinite without any).
+double QuadrotorAccelerationCap(const TemporalLimits& limits);
+// The quadrotor's acceleration limits on one acceleration vector sum_j coef[j] b_{grid[j]} (a cell
+// middle, or a Bernstein control point of a cell's acceleration): cone rows for the norm, the
+// largest thrust and the tilt, linear rows (through `row`) for the smallest thrust and the thrust
+// pointing up; a row on fixed values only is decided at once (infeasible_reason naming where()).
+void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vector<int>& grid,
+                                  const std::vector<Eigen::Vector3d>& coef,
+                                  const std::function<std::string()>& where, RowBuilder& row,
+                                  TemporalDiscretization* d);
 
 }  // namespace timeopt::internal

@@ -174,6 +174,8 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
   c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
     return "rest cell shape in piece " + std::to_string(piece) + " cell " + std::to_string(k);
   });
+  double speed_per_b = 0.0;                           // sum over axes of M1^2
+  Eigen::Vector3d acc_per_b = Eigen::Vector3d::Zero();  // C per axis
   for (int a = 0; a < 3; ++a) {
     const double m1 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 1, a));
     const double m2 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 2, a));
@@ -196,6 +198,27 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
       const double cap = std::pow(jmax / jerk_per_b15, 2.0 / 3.0);  // b^1.5 C <= j
       finish(1.0 / cap, LinearRow::Kind::kJerk, "jerk");
     }
+    speed_per_b += m1 * m1;
+    acc_per_b(a) = m1 / (1.5 * len) + m2;
+  }
+  if (!limits.HasNormLimits()) return;
+  // The quadrotor's limits, from the same per-axis bounds |f'_axis| <= M1 and |acc_axis| <= C_axis
+  // b1 (C = M1 / (1.5 ds) + M2): sufficient, linear in b1.
+  const auto row_le = [&](double per_b, double upper, LinearRow::Kind kind, const char* what) {
+    if (!(per_b > 0.0)) return;
+    c.row.Add(far, per_b);
+    c.row.Finish(kind, -kInf, upper, [&] { return std::string(what) + " in the rest cell of piece " + std::to_string(piece); });
+  };
+  const double g = limits.gravity;
+  if (limits.max_speed) row_le(speed_per_b, *limits.max_speed * *limits.max_speed, LinearRow::Kind::kVelocity, "speed");
+  if (limits.max_acceleration_norm) {
+    row_le(acc_per_b.norm(), *limits.max_acceleration_norm, LinearRow::Kind::kAcceleration, "acceleration norm");
+  }
+  if (limits.max_thrust) row_le(acc_per_b.norm(), *limits.max_thrust - g, LinearRow::Kind::kAcceleration, "thrust");
+  if (limits.min_thrust) row_le(acc_per_b(2), g - *limits.min_thrust, LinearRow::Kind::kAcceleration, "min thrust");
+  if (limits.max_tilt) {
+    const double tan_tilt = std::tan(*limits.max_tilt);
+    row_le(acc_per_b.head<2>().norm() + tan_tilt * acc_per_b(2), tan_tilt * g, LinearRow::Kind::kAcceleration, "tilt");
   }
 }
 
@@ -244,6 +267,42 @@ void AddExactJerkRows(JerkContext& c, int piece, int k, const SmallPoly (&jerk)[
   }
 }
 
+// The quadrotor's limits on a regular cell: the speed by the Bernstein coefficients of |f'|^2 b
+// (linear rows), the acceleration by cones on every Bernstein control point of f' a + f'' b (its
+// curve on the cell lies in their convex hull), through AddQuadrotorAccelerationRows.
+void AddQuadrotorCellRows(JerkContext& c, int piece, int k, const SmallPoly (&speed)[3],
+                          const SmallPoly (&acceleration)[3][3]) {
+  const int g0 = c.Half(piece, 2 * k);
+  const TemporalLimits& limits = c.problem.limits;
+  const auto where = [&] { return "piece " + std::to_string(piece) + " cell " + std::to_string(k); };
+  if (limits.max_speed) {
+    int size = 3;
+    for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(speed[j].size()));
+    SmallPoly bern[3];
+    for (int j = 0; j < 3; ++j) bern[j] = c.bernstein.Convert(Padded(speed[j], size));
+    const double s2 = *limits.max_speed * *limits.max_speed;
+    for (int i = 0; i < size; ++i) {
+      if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;
+      for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / s2);
+      c.row.Finish(LinearRow::Kind::kVelocity, -kInf, 1.0, [&] { return "speed in " + where(); });
+    }
+  }
+  int size = 1;
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(acceleration[a][j].size()));
+  }
+  SmallPoly bern[3][3];
+  for (int a = 0; a < 3; ++a) {
+    for (int j = 0; j < 3; ++j) bern[a][j] = c.bernstein.Convert(Padded(acceleration[a][j], size));
+  }
+  const std::vector<int> grid = {g0, g0 + 1, g0 + 2};
+  std::vector<Eigen::Vector3d> coef(3);
+  for (int i = 0; i < size; ++i) {
+    for (int j = 0; j < 3; ++j) coef[static_cast<size_t>(j)] = Eigen::Vector3d(bern[0][j](i), bern[1][j](i), bern[2][j](i));
+    internal::AddQuadrotorAccelerationRows(limits, grid, coef, where, c.row, &c.d);
+  }
+}
+
 void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vector<double>* lin) {
   const int g0 = c.Half(piece, 2 * k);
   const TemporalLimits& limits = c.problem.limits;
@@ -255,6 +314,10 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
   c.row.Add(g0 + 2, 0.5);
   c.row.Finish(LinearRow::Kind::kVelocity, -kInf, 0.0, [&] { return std::string("b >= 0"); });
 
+  // The quadrotor's limits: the speed's polynomials summed over axes, the acceleration's per axis.
+  const bool quadrotor = limits.HasNormLimits();
+  SmallPoly speed[3], acceleration[3][3];  // [grid value], [axis][grid value]
+  for (int j = 0; j < 3; ++j) speed[j] = SmallPoly::Zero(1);
   for (int a = 0; a < 3; ++a) {
     const SmallPoly q = c.OnCell(piece, k, 1, a), p2 = c.OnCell(piece, k, 2, a);
     const SmallPoly p3 = c.OnCell(piece, k, 3, a);
@@ -272,6 +335,11 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       const SmallPoly j3 = Multiply(p3, Basis(j));
       const int js = static_cast<int>(std::max({j1.size(), j2.size(), j3.size()}));
       jerk[j] = Padded(j1, js) + Padded(j2, js) + Padded(j3, js);
+      if (quadrotor) {
+        const int size = static_cast<int>(std::max(speed[j].size(), vel[j].size()));
+        speed[j] = Padded(speed[j], size) + Padded(vel[j], size);
+        acceleration[a][j] = acc[j];
+      }
     }
     // Every row of one kind in a common degree, converted to Bernstein form per grid value.
     const auto emit = [&](SmallPoly (&polys)[3], double sign, double add_b_weight, double bound,
@@ -311,9 +379,11 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
         });
       }
     };
-    emit(vel, 1.0, 0.0, vmax2, LinearRow::Kind::kVelocity);
-    emit(acc, 1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
-    emit(acc, -1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
+    if (std::isfinite(vmax2)) emit(vel, 1.0, 0.0, vmax2, LinearRow::Kind::kVelocity);
+    if (std::isfinite(amax)) {
+      emit(acc, 1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
+      emit(acc, -1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
+    }
     if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, jmax);
     if (mode == JerkRows::kLinearized) {
       // The jerk rows on kJerkSegments equal parts of the cell, each linearized at the previous
@@ -353,6 +423,7 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       }
     }
   }
+  if (quadrotor) AddQuadrotorCellRows(c, piece, k, speed, acceleration);
 }
 
 // The boundary acceleration at the start (end = false) or end of the path.
@@ -431,6 +502,23 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
     a = std::min(a, p.limits.max_acceleration(axis) / u);
     j = std::min(j, (*p.limits.max_jerk)(axis) / u);
   }
+  // The quadrotor's limits on an acceleration a w along w = the tangent (leaving rest) or minus it
+  // (reaching rest): ||a w + g e3||^2 = a^2 + 2 a g w_z + g^2 <= max_thrust^2, a w_z + g >= min_thrust,
+  // and along a level w the tilt allows g tan(tilt).
+  if (p.limits.max_speed) v = std::min(v, *p.limits.max_speed);
+  if (p.limits.max_acceleration_norm) a = std::min(a, *p.limits.max_acceleration_norm);
+  const double g = p.limits.gravity;
+  const Eigen::Vector3d w = (end ? -1.0 : 1.0) * f1 / speed;
+  if (p.limits.max_thrust) {
+    const double T = *p.limits.max_thrust;
+    a = std::min(a, -g * w(2) + std::sqrt(std::max(0.0, T * T - g * g * (1.0 - w(2) * w(2)))));
+  }
+  if (p.limits.min_thrust && w(2) < -1e-12) a = std::min(a, (g - *p.limits.min_thrust) / -w(2));
+  if (p.limits.max_tilt) {
+    const double level = Eigen::Vector2d(w(0), w(1)).norm();
+    if (level > 1e-12) a = std::min(a, g * std::tan(*p.limits.max_tilt) / level);
+  }
+  if (!(a > 0.0)) return 0.0;
   // A curved start cannot go faster than its curvature kappa allows: |f'' across| = kappa v^2 <= a.
   const Eigen::Vector3d f2 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 2);
   const double kappa = f1.cross(f2).norm() / (speed * speed * speed);

@@ -75,6 +75,9 @@ void BoundByPointVelocity(const TemporalProblem& problem, TemporalDiscretization
       const double s = edges[k] + 0.5 * (j - 2 * static_cast<int>(k)) * (edges[k + 1] - edges[k]);
       const Eigen::Vector3d t = problem.curve.Evaluate(i, s, 1);
       double& ub = d->var_upper[static_cast<size_t>(v.var)];
+      if (problem.limits.max_speed && t.norm() > problem.zero_tangent_tolerance) {
+        ub = std::min(ub, *problem.limits.max_speed * *problem.limits.max_speed / (t.squaredNorm() * v.scale));
+      }
       for (int a = 0; a < 3; ++a) {
         if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
         ub = std::min(ub, vmax2(a) / (t(a) * t(a) * v.scale));

@@ -132,11 +132,7 @@ void TemporalProblem::Validate() const {
       throw std::invalid_argument("limits.max_acceleration_change: not used together with "
                                   "limits.max_jerk (the jerk limit bounds the acceleration's change)");
     }
-    if (limits.HasNormLimits()) {
-      throw std::invalid_argument("limits.max_speed, max_acceleration_norm, max_thrust, min_thrust and "
-                                  "max_tilt are not supported together with limits.max_jerk yet; use the "
-                                  "per-axis limits with a jerk limit");
-    }
+
   }
   if (!(scp_tolerance > 0.0 && scp_tolerance <= 0.1)) {
     throw std::invalid_argument("scp_tolerance: expected a number in (0, 0.1], got " + Num(scp_tolerance));
