@@ -197,7 +197,7 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
                       (defaults.limits.max_jerk ? shown(defaults.limits.max_jerk->x()) : std::string()))
       ->check(CLI::NonNegativeNumber);
   // The quadrotor's limits apply with the per-axis ones (the front end and the spatial stage size
-  // the path by those); not yet together with a jerk limit (use --max-jerk 0).
+  // the path by those).
   AddQuadrotorLimitOptions(sub, &args->quadrotor);
   sub->add_option("--robot-radius", args->robot_radius,
                   "Robot radius, metres" + shown(defaults.robot_radius))
