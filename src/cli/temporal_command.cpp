@@ -107,25 +107,16 @@ std::string LimitsLine(const VehicleLimits& l) {
   return ss.str();
 }
 
-// ", max ||v||/max_speed: 1, ..." for the quadrotor limits given.
-std::string QuadrotorRatios(const TemporalResult& r) {
+// ", max ||v||/max_speed 1, ..." for the quadrotor limits given, from a TemporalResult (the dense
+// check) or a FeasibilityReport (the flight): both name their ratios alike.
+template <typename Ratios>
+std::string QuadrotorRatios(const Ratios& r) {
   std::ostringstream ss;
-  if (r.max_speed_ratio) ss << ", max ||v||/max_speed: " << *r.max_speed_ratio;
-  if (r.max_acceleration_norm_ratio) ss << ", max ||a||/max_acceleration_norm: " << *r.max_acceleration_norm_ratio;
-  if (r.max_thrust_ratio) ss << ", max thrust/max_thrust: " << *r.max_thrust_ratio;
-  if (r.min_thrust_ratio) ss << ", min_thrust/min thrust: " << *r.min_thrust_ratio;
-  if (r.max_tilt_ratio) ss << ", max tilt/max_tilt: " << *r.max_tilt_ratio;
-  return ss.str();
-}
-
-// The same for a flight's report.
-std::string FlightQuadrotorRatios(const FeasibilityReport& f) {
-  std::ostringstream ss;
-  if (f.max_speed_ratio) ss << ", max ||v||/max_speed " << *f.max_speed_ratio;
-  if (f.max_acceleration_norm_ratio) ss << ", max ||a||/max_acceleration_norm " << *f.max_acceleration_norm_ratio;
-  if (f.max_thrust_ratio) ss << ", max thrust/max_thrust " << *f.max_thrust_ratio;
-  if (f.min_thrust_ratio) ss << ", min_thrust/min thrust " << *f.min_thrust_ratio;
-  if (f.max_tilt_ratio) ss << ", max tilt/max_tilt " << *f.max_tilt_ratio;
+  if (r.max_speed_ratio) ss << ", max ||v||/max_speed " << *r.max_speed_ratio;
+  if (r.max_acceleration_norm_ratio) ss << ", max ||a||/max_acceleration_norm " << *r.max_acceleration_norm_ratio;
+  if (r.max_thrust_ratio) ss << ", max thrust/max_thrust " << *r.max_thrust_ratio;
+  if (r.min_thrust_ratio) ss << ", min_thrust/min thrust " << *r.min_thrust_ratio;
+  if (r.max_tilt_ratio) ss << ", max tilt/max_tilt " << *r.max_tilt_ratio;
   return ss.str();
 }
 
@@ -186,7 +177,7 @@ int RunWaypoints(const WaypointsArgs& args) {
                                                    problem.boundary.start_acceleration);
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
-          << ", max |a|/amax " << flight.max_acceleration_ratio << FlightQuadrotorRatios(flight) << " ("
+          << ", max |a|/amax " << flight.max_acceleration_ratio << QuadrotorRatios(flight) << " ("
           << (flight.feasible ? "limits hold" : "limits exceeded")
           << (problem.limits.max_jerk ? " within 1%" : "") << "; see `timeopt simulate`)";
     if (!flight.feasible && !problem.limits.max_jerk) flown << "\n  note: " << kFlightNote;

@@ -9,15 +9,17 @@
 // with b = scale * x (or a fixed value) at each cell's two grid points: a convex objective over
 // the free grid values and linear rows. Every cell and every row touches a few neighbouring values
 // along the path, so the Newton system of a primal-dual interior-point method on this problem,
-// grad^2 J + G' (Z / S) G, is banded (half-bandwidth 1 for the paper's and the certified rows, 2
-// with lambda_a), and one iteration is a few passes over the rows plus a banded Cholesky
-// factorization in O(n). The SOCP (socp_backend.cpp) is the same problem with sqrt(b) and the
-// cell times lifted into cones; this path solves it without the lift.
+// grad^2 J + G' (Z / S) G, is banded (tridiagonal for the paper's and the certified rows), and one
+// iteration is a few passes over the rows plus a banded Cholesky factorization in O(n). The SOCP
+// (socp_backend.cpp) is the same problem with sqrt(b) and the cell times lifted into cones; this
+// path solves it without the lift, from a reachability start (GreedyProfile in banded_ipm.cpp).
 //
-// Used only when it applies (no equality rows, a small bandwidth, no cell whose two values are
-// both fixed at 0) and trusted only when it ends optimal: anything else (the iteration limit, a
-// factorization that breaks down, an infeasible problem, which it does not try to certify) is
-// handed to the conic solver, which decides. So statuses never depend on this path.
+// Used only when it applies (every row over one value or two neighbouring ones: not lambda_a's
+// rows, not the jerk-limited mode's equalities, no cone or cubic rows; no cell whose two values are
+// both fixed at 0; a reachability profile exists) and trusted only when it ends optimal: anything
+// else (the iteration limit, a factorization that breaks down, an infeasible problem, which it
+// does not try to certify) is handed to the conic solver, which decides. So statuses never depend
+// on this path.
 
 #include <string>
 #include <vector>
