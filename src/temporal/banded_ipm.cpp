@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "reachability.h"
+
 namespace timeopt::internal {
 namespace {
 
@@ -286,94 +288,18 @@ class BandedIpm {
     for (int r = 0; r < m_; ++r) z_[static_cast<size_t>(r)] = mu0 / s_[static_cast<size_t>(r)];
   }
 
-  // A feasible profile by reachability along the path (as TOPP-RA's controllable sets), when every
-  // row touches one value or two consecutive ones (Setup): backward, the interval K_v of x_v from
-  // which the rest of the path stays feasible; forward, the largest x_v in K_v that the rows with
-  // x_{v-1} allow. False when a K_v comes out empty.
+  // A feasible profile by reachability along the path (reachability.h): the controllable sets
+  // backward, then the largest values forward. False when a set comes out empty.
   bool GreedyProfile(std::vector<double>* out) const {
-    // Single-value bounds l_v <= x_v <= u_v and the two-value rows of each consecutive pair.
-    std::vector<double> l(static_cast<size_t>(n_), 0.0), u(static_cast<size_t>(n_), kInf);
-    std::vector<std::vector<int>> pair_rows(static_cast<size_t>(n_));
-    for (int r = 0; r < m_; ++r) {
-      const Row& row = rows_[static_cast<size_t>(r)];
-      if (row.v1 == 0.0) {
-        const double a = row.v0, h = h_[static_cast<size_t>(r)];
-        if (a > 0.0) u[static_cast<size_t>(row.c0)] = std::min(u[static_cast<size_t>(row.c0)], h / a);
-        else if (a < 0.0) l[static_cast<size_t>(row.c0)] = std::max(l[static_cast<size_t>(row.c0)], h / a);
-        continue;
-      }
-      pair_rows[static_cast<size_t>(row.c0)].push_back(r);  // c1 = c0 + 1 (Setup)
+    ChainRows chain(n_);
+    for (size_t r = 0; r < rows_.size(); ++r) {
+      const Row& row = rows_[r];
+      chain.Add(row.c0, row.v0, row.c1, row.v1, h_[r]);  // two-value rows are neighbours (Setup)
     }
-    // A value without an upper bound of its own (a vanishing tangent) gets a large one: the rows
-    // with its neighbours bound it anyway, and the polygons below stay bounded.
-    double largest = 0.0;
-    for (double b : u) {
-      if (std::isfinite(b)) largest = std::max(largest, b);
-    }
-    const double cap = largest > 0.0 ? 1e3 * largest : 1.0;
-    for (int v = 0; v < n_; ++v) {
-      double& top = u[static_cast<size_t>(v)];
-      if (!std::isfinite(top)) top = std::max(cap, l[static_cast<size_t>(v)]);
-      if (l[static_cast<size_t>(v)] > top) return false;
-    }
-    // Row r (over v and v + 1) as a x_v + b x_{v+1} <= h.
-    const auto coefs = [&](int r, int /*v*/, double* a, double* b, double* h) {
-      *a = rows_[static_cast<size_t>(r)].v0;
-      *b = rows_[static_cast<size_t>(r)].v1;
-      *h = h_[static_cast<size_t>(r)];
-    };
-    std::vector<double> lo(l), hi(u);
-    struct Line { double a, b, h; };
-    std::vector<Line> lines;
-    for (int v = n_ - 2; v >= 0; --v) {
-      // The polygon of (x_v, y = x_{v+1}): its rows and the box; the extremes of x_v over it.
-      lines.clear();
-      for (int r : pair_rows[static_cast<size_t>(v)]) {
-        Line q;
-        coefs(r, v, &q.a, &q.b, &q.h);
-        lines.push_back(q);
-      }
-      lines.push_back({1.0, 0.0, u[static_cast<size_t>(v)]});
-      lines.push_back({-1.0, 0.0, -l[static_cast<size_t>(v)]});
-      lines.push_back({0.0, 1.0, hi[static_cast<size_t>(v) + 1]});
-      lines.push_back({0.0, -1.0, -lo[static_cast<size_t>(v) + 1]});
-      double best_hi = -kInf, best_lo = kInf;
-      for (size_t i = 0; i < lines.size(); ++i) {
-        for (size_t j = i + 1; j < lines.size(); ++j) {
-          const double det = lines[i].a * lines[j].b - lines[j].a * lines[i].b;
-          if (!(std::abs(det) > 1e-12 * (std::abs(lines[i].a * lines[j].b) + std::abs(lines[j].a * lines[i].b)))) continue;
-          const double xv = (lines[i].h * lines[j].b - lines[j].h * lines[i].b) / det;
-          const double yv = (lines[i].a * lines[j].h - lines[j].a * lines[i].h) / det;
-          if (!std::isfinite(xv) || !std::isfinite(yv)) continue;
-          bool feasible = true;
-          for (const Line& q : lines) {
-            if (q.a * xv + q.b * yv > q.h + 1e-12 * (1.0 + std::abs(q.h))) {
-              feasible = false;
-              break;
-            }
-          }
-          if (!feasible) continue;
-          best_hi = std::max(best_hi, xv);
-          best_lo = std::min(best_lo, xv);
-        }
-      }
-      if (!(best_hi >= best_lo)) return false;
-      lo[static_cast<size_t>(v)] = std::max(l[static_cast<size_t>(v)], best_lo);
-      hi[static_cast<size_t>(v)] = std::min(u[static_cast<size_t>(v)], best_hi);
-      if (lo[static_cast<size_t>(v)] > hi[static_cast<size_t>(v)]) return false;
-    }
-    out->assign(static_cast<size_t>(n_), 0.0);
-    (*out)[0] = hi[0];
-    for (int v = 1; v < n_; ++v) {
-      double top = hi[static_cast<size_t>(v)];
-      const double prev = (*out)[static_cast<size_t>(v) - 1];
-      for (int r : pair_rows[static_cast<size_t>(v) - 1]) {
-        double a, b, h;
-        coefs(r, v - 1, &a, &b, &h);
-        if (b > 0.0) top = std::min(top, (h - a * prev) / b);
-      }
-      (*out)[static_cast<size_t>(v)] = std::max(top, lo[static_cast<size_t>(v)]);
-    }
+    if (!chain.CapUnbounded()) return false;
+    std::vector<double> lo, hi;
+    if (ControllableSets(chain, &lo, &hi) >= 0) return false;
+    *out = GreedyForward(chain, lo, hi, hi[0]);
     return true;
   }
 

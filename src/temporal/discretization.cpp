@@ -326,7 +326,7 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
 // or a value shared with the previous piece at a smooth joint. Returns the tangent f'(k ds) at
 // every grid point, also used by the paper's velocity rows.
 std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
-                                              TemporalDiscretization* out) {
+                                              TemporalDiscretization* out, FreeBoundaries* free) {
   TemporalDiscretization& d = *out;
   const PiecewiseCurve& curve = problem.curve;
   const int m = curve.num_pieces();
@@ -359,12 +359,19 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k <= K; ++k) {
       GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, k))];
-      if (i == 0 && k == 0) {
-        g = BoundaryValue(problem.boundary.start_velocity, curve.Evaluate(0, 0.0, 1), problem,
-                          "boundary.start_velocity", piece_scale.front(), &next_var);
-      } else if (i == m - 1 && k == K) {
-        g = BoundaryValue(problem.boundary.end_velocity, curve.Evaluate(m - 1, 1.0, 1), problem,
-                          "boundary.end_velocity", piece_scale.back(), &next_var);
+      if ((i == 0 && k == 0) || (i == m - 1 && k == K)) {
+        const int end = i == 0 && k == 0 ? 0 : 1;
+        const double scale = end == 0 ? piece_scale.front() : piece_scale.back();
+        g = BoundaryValue(end == 0 ? problem.boundary.start_velocity : problem.boundary.end_velocity,
+                          curve.Evaluate(i, end == 0 ? 0.0 : 1.0, 1), problem,
+                          end == 0 ? "boundary.start_velocity" : "boundary.end_velocity", scale, &next_var);
+        if (free != nullptr && g.var < 0 && g.fixed > 0.0) {
+          // Free below the given speed.
+          free->var[end] = next_var;
+          free->given_b[end] = g.fixed;
+          free->scale[end] = scale;
+          g = GridValue{next_var++, scale, 0.0};
+        }
       } else if (k == 0) {
         const JointInfo& j = d.joints[static_cast<size_t>(i - 1)];
         const GridValue& prev = d.grid[static_cast<size_t>(d.GridIndex(i - 1, K))];
@@ -387,6 +394,11 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   }
   d.num_vars = next_var;
   d.var_upper.assign(static_cast<size_t>(next_var), std::numeric_limits<double>::infinity());
+  if (free != nullptr) {
+    for (int e = 0; e < 2; ++e) {
+      if (free->var[e] >= 0) d.var_upper[static_cast<size_t>(free->var[e])] = free->given_b[e] / free->scale[e];
+    }
+  }
 
   return grid_tangent;
 }
@@ -765,6 +777,10 @@ void AddAccelerationChangeRows(const TemporalProblem& problem,
 }  // namespace internal
 
 TemporalDiscretization Discretize(const TemporalProblem& problem) {
+  return internal::DiscretizeWithFreeBoundaries(problem, nullptr);
+}
+
+TemporalDiscretization internal::DiscretizeWithFreeBoundaries(const TemporalProblem& problem, FreeBoundaries* free) {
   using namespace internal;
   problem.Validate();
   const int m = problem.curve.num_pieces();
@@ -777,7 +793,7 @@ TemporalDiscretization Discretize(const TemporalProblem& problem) {
 
   ClassifyJoints(problem, &d);
   CheckBoundaryAccelerations(problem, &d);
-  const std::vector<Eigen::Vector3d> grid_tangent = AssignGridValues(problem, &d);
+  const std::vector<Eigen::Vector3d> grid_tangent = AssignGridValues(problem, &d, free);
   MakeCells(problem, &d);
   RowBuilder row(d);
   if (problem.constraint_mode == ConstraintMode::kPaper) {

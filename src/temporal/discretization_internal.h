@@ -166,13 +166,28 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
 void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
 // One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
 // f'(k ds) at every grid point.
+// With `free` set, a boundary with a non-zero speed gets a free value instead of a fixed one,
+// bounded above by the given b (see FreeBoundaries).
+struct FreeBoundaries;
 std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
-                                              TemporalDiscretization* out);
+                                              TemporalDiscretization* out, FreeBoundaries* free = nullptr);
 // The cells (problem.cells_per_piece per piece), and the verdict on a piece of one cell that must
 // start and end at rest.
 void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
 // Keeps, per variable, only the tightest row that bounds it alone, as its upper bound.
 void KeepTightestUpperBounds(TemporalDiscretization* d);
+// The boundary speeds made free (DiscretizeWithFreeBoundaries): for the start and the end, the
+// free value that stands for it (-1 when the boundary is at rest or its tangent vanishes), the
+// given b there (the value's upper bound, in b) and its scale (b = scale x).
+struct FreeBoundaries {
+  int var[2] = {-1, -1};
+  double given_b[2] = {0.0, 0.0};
+  double scale[2] = {1.0, 1.0};
+};
+// Discretize with the boundary speeds free below the given ones: the problem that
+// TemporalProblem::relax_boundary and the diagnosis of an infeasible problem look at.
+TemporalDiscretization DiscretizeWithFreeBoundaries(const TemporalProblem& problem, FreeBoundaries* free);
+
 // The largest acceleration norm the quadrotor's limits allow (infinite without any).
 double QuadrotorAccelerationCap(const TemporalLimits& limits);
 // The quadrotor's acceleration limits on one acceleration vector sum_j coef[j] b_{grid[j]} (a cell
