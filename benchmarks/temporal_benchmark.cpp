@@ -152,6 +152,34 @@ void BM_SocpQuadrotor(benchmark::State& state) {
 }
 BENCHMARK(BM_SocpQuadrotor)->Args({10, 50, 0})->Args({10, 50, 1})->Unit(benchmark::kMillisecond);
 
+// Issue 21: a start too fast to brake for the curves ahead (m = 10, K = 50, start at 2.9 m/s along
+// the first tangent, amax 0.3 m/s^2 per axis). Argument 0: the infeasible solve with its diagnosis;
+// 1: with relax_boundary (the closest start, then the solve). Compare with the same problem
+// started at 40% of the relaxed speed, feasible (argument 2).
+void BM_SocpInfeasibleStart(benchmark::State& state) {
+  TemporalProblem p = MakeProblem(10, 50);
+  p.limits.max_acceleration.setConstant(0.3);
+  const Eigen::Vector3d t = p.curve.Evaluate(0, 0.0, 1).normalized();
+  p.boundary.start_velocity = 2.9 * t;
+  if (state.range(0) == 1) p.relax_boundary = true;
+  if (state.range(0) == 2) {
+    p.relax_boundary = true;
+    const TemporalResult relaxed = MakeSocpTemporalSolver()->Solve(p);
+    p.relax_boundary = false;
+    p.boundary.start_velocity = 0.4 * relaxed.boundary_relaxation->start_speed * t;
+  }
+  auto solver = MakeSocpTemporalSolver();
+  TemporalResult r;
+  for (auto _ : state) {
+    r = solver->Solve(p);
+    benchmark::ClobberMemory();
+  }
+  state.counters["iterations"] = r.iterations;
+  state.counters["infeasible"] = r.status == TemporalStatus::kInfeasible ? 1.0 : 0.0;
+  state.counters["relaxed"] = r.boundary_relaxation ? 1.0 : 0.0;
+}
+BENCHMARK(BM_SocpInfeasibleStart)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 void BM_SocpRho(benchmark::State& s) {
   Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper, 0.1 * static_cast<double>(s.range(2)));
 }

@@ -46,6 +46,7 @@ struct TemporalArgs {
   double rate = kDefaultSampleRateHz;
   std::string plot;
   std::string export_cbf;
+  bool relax_boundary = false;  // also "relax_boundary": true in the problem
 };
 
 // Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
@@ -88,7 +89,8 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 }
 
 int RunTemporal(const TemporalArgs& args) {
-  const TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+  TemporalProblem problem = ReadTemporalProblemJson(args.problem);
+  if (args.relax_boundary) problem.relax_boundary = true;
   const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
   if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
   return exit_code;
@@ -221,6 +223,9 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
+  sub->add_flag("--relax-boundary", args->relax_boundary,
+               "If the boundary speeds cannot be flown, answer with the closest ones that can (the result's "
+               "boundary_relaxation) instead of infeasible");
   sub->add_option("--export-cbf", args->export_cbf,
                   "Also write the SOCP that --solver socp solves, in the Conic Benchmark Format (its "
                   "optimal value is the result's objective), for another conic solver");

@@ -26,7 +26,7 @@ const json& Require(const json& j, const std::string& key, const std::string& wh
 TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std::string& context) {
   const json j = internal::ParseJsonText(json_text, context);
   if (!j.is_object()) throw std::invalid_argument(context + ": expected a JSON object");
-  RejectUnknownKeys(j, {"curve", "limits", "boundary", "discretization", "rho", "constraint_mode"},
+  RejectUnknownKeys(j, {"curve", "limits", "boundary", "discretization", "rho", "constraint_mode", "relax_boundary"},
                     "");
   TemporalProblem p;
   p.curve = internal::CurveFromJson(Require(j, "curve", ""), "curve").curve;
@@ -85,6 +85,10 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
     }
   }
   if (j.contains("rho")) p.rho = internal::FiniteNumber(j.at("rho"), "rho");
+  if (j.contains("relax_boundary")) {
+    if (!j.at("relax_boundary").is_boolean()) throw std::invalid_argument("relax_boundary: expected true or false");
+    p.relax_boundary = j.at("relax_boundary").get<bool>();
+  }
   if (j.contains("constraint_mode")) {
     p.constraint_mode = internal::EnumField(j.at("constraint_mode"), "constraint_mode", kConstraintModes);
   }
@@ -129,6 +133,19 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
     j["max_jerk_ratio"] = ok ? json(r.max_jerk_ratio) : json(nullptr);
     j["scp_iterations"] = r.scp_iterations;
     j["scp_history"] = r.scp_history;
+  }
+  if (r.infeasibility) {
+    j["infeasibility"] = {{"cause", r.infeasibility->cause},
+                          {"where", r.infeasibility->where},
+                          {"detail", r.infeasibility->detail}};
+  }
+  if (r.boundary_relaxation) {
+    const TemporalResult::BoundaryRelaxation& b = *r.boundary_relaxation;
+    j["boundary_relaxation"] = {
+        {"start_speed_given", b.start_speed_given}, {"start_speed", b.start_speed},
+        {"start_violation", b.start_speed_given - b.start_speed},
+        {"end_speed_given", b.end_speed_given}, {"end_speed", b.end_speed},
+        {"end_violation", b.end_speed_given - b.end_speed}};
   }
   json joints = json::array();
   for (const JointInfo& ji : r.joints) {

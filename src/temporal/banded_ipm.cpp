@@ -35,6 +35,9 @@ constexpr double kStepFraction = 0.99;
 // the scaled-down start alone took 37, and z from the gradient's size instead of J 75 (no answer).
 constexpr double kGreedyWeight = 0.9;
 constexpr double kStartGap = 0.1;
+// How much looser (relative) every bound must still leave the problem without a profile for
+// this path to call it infeasible itself (see banded_ipm.h).
+constexpr double kInfeasibleMargin = 1e-6;
 // The smallest pivot of the Cholesky factorization relative to its diagonal entry: below it the
 // system is too badly conditioned for this path, and the conic solver takes over.
 constexpr double kPivotFloor = 1e-15;
@@ -124,7 +127,10 @@ class BandedIpm {
 
   BandedIpmOutcome Run() {
     BandedIpmOutcome out;
-    if (!Setup(&out.message)) return out;
+    if (!Setup(&out.message)) {
+      if (infeasible_) out.kind = BandedIpmOutcome::Kind::kInfeasible;
+      return out;
+    }
     out.kind = BandedIpmOutcome::Kind::kGaveUp;
     Start();
     for (int it = 0;; ++it) {
@@ -242,8 +248,12 @@ class BandedIpm {
       return false;
     }
     p_ = p;
-    if (!GreedyProfile(&greedy_)) {
-      *why = "the reachability pass found no profile";
+    if (!GreedyProfile(&greedy_, 0.0)) {
+      std::vector<double> unused;
+      infeasible_ = !GreedyProfile(&unused, kInfeasibleMargin);
+      *why = infeasible_ ? "no time allocation satisfies the limits: reachability along the path finds no "
+                           "profile (structured path)"
+                         : "the reachability pass found no profile";
       return false;
     }
     return true;
@@ -290,11 +300,13 @@ class BandedIpm {
 
   // A feasible profile by reachability along the path (reachability.h): the controllable sets
   // backward, then the largest values forward. False when a set comes out empty.
-  bool GreedyProfile(std::vector<double>* out) const {
+  // `margin` loosens every bound: h + margin |h| (and margin for h = 0).
+  bool GreedyProfile(std::vector<double>* out, double margin) const {
     ChainRows chain(n_);
     for (size_t r = 0; r < rows_.size(); ++r) {
       const Row& row = rows_[r];
-      chain.Add(row.c0, row.v0, row.c1, row.v1, h_[r]);  // two-value rows are neighbours (Setup)
+      const double h = h_[r] + margin * std::max(1.0, std::abs(h_[r]));
+      chain.Add(row.c0, row.v0, row.c1, row.v1, h);  // two-value rows are neighbours (Setup)
     }
     if (!chain.CapUnbounded()) return false;
     std::vector<double> lo, hi;
@@ -446,6 +458,7 @@ class BandedIpm {
   std::vector<double> h_;
   std::vector<CellTerm> cells_;
   std::vector<double> greedy_;  // the reachability profile (GreedyProfile)
+  bool infeasible_ = false;     // no profile even with the bounds loosened (kInfeasibleMargin)
   std::vector<double> x_, s_, z_;
   std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_;
   double objective_ = 0.0;

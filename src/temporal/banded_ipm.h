@@ -14,6 +14,10 @@
 // (socp_backend.cpp) is the same problem with sqrt(b) and the cell times lifted into cones; this
 // path solves it without the lift, from a reachability start (GreedyProfile in banded_ipm.cpp).
 //
+// An empty controllable set proves the problem infeasible when it stays empty with every row's
+// bound loosened by 1e-6 relative (kInfeasible): far above the solvers' tolerances, so the conic
+// solver would say so too, at several times the cost. A borderline one goes to the conic solver.
+//
 // Used only when it applies (every row over one value or two neighbouring ones: not lambda_a's
 // rows, not the jerk-limited mode's equalities, no cone or cubic rows; no cell whose two values are
 // both fixed at 0; a reachability profile exists) and trusted only when it ends optimal: anything
@@ -44,6 +48,7 @@ struct BandedIpmOutcome {
     kNotApplicable,  // the problem has equality rows, a wide band, or an infinite cell time
     kOptimal,        // x is the answer to the tolerances
     kGaveUp,         // the conic solver decides (message says why)
+    kInfeasible,     // reachability proves it: no profile, even with every bound 1e-6 looser
   };
   Kind kind = Kind::kNotApplicable;
   int iterations = 0;

@@ -134,15 +134,16 @@ std::vector<double> GreedyForward(const ChainRows& c, const std::vector<double>&
   return x;
 }
 
-int BrakingFailure(const ChainRows& c, const std::vector<double>& hi, double start) {
+int BrakingFailure(const ChainRows& c, double start) {
   const int n = c.size();
   double prev = start;
   for (int v = 1; v < n; ++v) {
-    double bottom = c.l[static_cast<size_t>(v)];
+    double bottom = c.l[static_cast<size_t>(v)], top = c.u[static_cast<size_t>(v)];
     for (const ChainRows::Pair& p : c.pairs[static_cast<size_t>(v) - 1]) {
       if (p.b < 0.0) bottom = std::max(bottom, (p.h - p.a * prev) / p.b);
+      if (p.b > 0.0) top = std::min(top, (p.h - p.a * prev) / p.b);
     }
-    if (bottom > hi[static_cast<size_t>(v)] * (1.0 + 1e-12) + 1e-300) return v;
+    if (bottom > top + 1e-12 * (1.0 + std::abs(top))) return v;
     prev = bottom;
   }
   return -1;

@@ -47,8 +47,8 @@ std::vector<double> GreedyForward(const ChainRows& c, const std::vector<double>&
                                   double start);
 
 // Forward from x_0 = `start` braking as hard as the rows allow (the smallest x_v they allow after
-// x_{v-1}): the first v whose smallest value is above hi_v (the vehicle cannot slow down enough to
-// stay controllable there), or -1.
-int BrakingFailure(const ChainRows& c, const std::vector<double>& hi, double start);
+// x_{v-1}): the first v where even that is above what the rows allow there (its own bound, or the
+// rows with x_{v-1}): where braking fails (a stop, a slower part), or -1.
+int BrakingFailure(const ChainRows& c, double start);
 
 }  // namespace timeopt::internal

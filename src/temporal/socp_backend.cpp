@@ -216,6 +216,13 @@ class SocpTemporalSolver final : public TemporalSolver {
         result->reduced_accuracy = false;
         return;
       }
+      if (b.kind == internal::BandedIpmOutcome::Kind::kInfeasible) {
+        result->iterations = 0;
+        result->solve_time_seconds = banded_seconds;
+        result->status = TemporalStatus::kInfeasible;
+        result->message = b.message;
+        return;
+      }
       banded_iterations = b.iterations;
     }
     const auto start = Clock::now();

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "timeopt/core/enum_strings.h"
+#include "infeasibility.h"
 #include "solver_internal.h"
 #include "timeopt/core/option_check.h"
 
@@ -195,13 +196,37 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
 }  // namespace internal
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
+  TemporalResult result = problem.limits.max_jerk ? SolveJerkLimited(problem) : SolvePaperOrCertified(problem);
+  if (result.status != TemporalStatus::kInfeasible) return result;
+  // Why, and (asked for) the closest boundary speeds: only infeasible problems pay for this.
+  std::optional<internal::RelaxedSpeeds> relaxed;
+  result.infeasibility = internal::DiagnoseInfeasible(problem, result.message, &relaxed);
+  if (!problem.relax_boundary || !relaxed) return result;
+  TemporalProblem closest = problem;
+  closest.relax_boundary = false;
+  closest.boundary.start_velocity = problem.boundary.start_velocity * relaxed->start_factor;
+  closest.boundary.end_velocity = problem.boundary.end_velocity * relaxed->end_factor;
+  TemporalResult answer = Solve(closest);
+  answer.build_time_seconds += result.build_time_seconds;
+  answer.solve_time_seconds += result.solve_time_seconds;
+  answer.iterations += result.iterations;
+  if (answer.is_success()) {
+    answer.boundary_relaxation = TemporalResult::BoundaryRelaxation{
+        problem.boundary.start_velocity.norm(), closest.boundary.start_velocity.norm(),
+        problem.boundary.end_velocity.norm(), closest.boundary.end_velocity.norm()};
+    answer.infeasibility = result.infeasibility;  // why the given boundaries could not be flown
+    answer.message = "boundary relaxed: " + result.infeasibility->detail;
+  }
+  return answer;
+}
+
+TemporalResult TemporalSolver::SolvePaperOrCertified(const TemporalProblem& problem) {
   using Clock = std::chrono::steady_clock;
   const auto seconds_since = [](Clock::time_point from) {
     return std::chrono::duration<double>(Clock::now() - from).count();
   };
   TemporalResult result;
   result.solver = ToString(backend());
-  if (problem.limits.max_jerk) return SolveJerkLimited(problem);
   const Clock::time_point start = Clock::now();
   TemporalDiscretization d;
   try {

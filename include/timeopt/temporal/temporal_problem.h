@@ -98,6 +98,12 @@ struct TemporalProblem {
   // jerk rows exactly and solves once (these two are not used). scp_tolerance in (0, 0.1],
   // max_scp_iterations in [1, 100].
   double scp_tolerance = 1e-4;
+  // An infeasible problem answers with the closest boundary speeds it can fly instead (the result's
+  // boundary_relaxation): the start speed lowered as little as possible, then the end speed, along
+  // their tangents, and the minimum time for them. For the paper's and certified rows without
+  // lambda_a or a jerk limit (their rows make a chain along the path); otherwise the status stays
+  // infeasible with the diagnosis. Boundary accelerations are not relaxed.
+  bool relax_boundary = false;
   int max_scp_iterations = 30;
 
   // Throws std::invalid_argument naming the offending field ("limits.max_velocity[1]: expected a

@@ -72,6 +72,24 @@ struct TemporalResult {
   // otherwise), the number of convex solves of the sequential convex programme (the first one
   // jerk-free), and T after each of them (the first one not jerk-feasible; each later one is).
   // The Ipopt backend solves the exact, non-convex jerk rows once: scp_iterations 0, no history.
+  // Why the problem is infeasible (status kInfeasible): cause "boundary_speed" (a boundary speed
+  // above a speed limit), "braking" (a start too fast to brake for a slower part ahead; where names
+  // the arc length at which braking fails), "end_speed" (an end speed that cannot be reached),
+  // "boundary_acceleration" (a boundary acceleration the limits cannot meet), or "limits" (the
+  // limits allow no profile whatever the boundary speeds); where and a one-line detail.
+  struct Infeasibility {
+    std::string cause;
+    std::string where;
+    std::string detail;
+  };
+  std::optional<Infeasibility> infeasibility;
+  // TemporalProblem::relax_boundary on an infeasible problem: the closest boundary speeds it could
+  // fly (m/s along the tangent), the given ones, and the answer for them (status optimal).
+  struct BoundaryRelaxation {
+    double start_speed_given = 0.0, start_speed = 0.0;
+    double end_speed_given = 0.0, end_speed = 0.0;
+  };
+  std::optional<BoundaryRelaxation> boundary_relaxation;
   bool jerk_limited = false;  // the problem had limits.max_jerk (set whatever the status)
   double max_jerk_ratio = 0.0;
   int scp_iterations = 0;

@@ -23,7 +23,8 @@ class TemporalSolver {
  public:
   virtual ~TemporalSolver() = default;
   // Never throws for bad problems: they come back as kInvalidInput with a message naming the
-  // field. An unexpected error inside a backend comes back as kNumericalError.
+  // field. An unexpected error inside a backend comes back as kNumericalError. An infeasible
+  // problem comes back with result.infeasibility, or relaxed (TemporalProblem::relax_boundary).
   TemporalResult Solve(const TemporalProblem& problem);
   virtual TemporalBackend backend() const = 0;
 
@@ -42,6 +43,8 @@ class TemporalSolver {
   // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited, or one solve
   // of its exact rows (jerk_solver.cpp).
   TemporalResult SolveJerkLimited(const TemporalProblem& problem);
+  // Without a jerk limit: discretize and solve once.
+  TemporalResult SolvePaperOrCertified(const TemporalProblem& problem);
 };
 
 // Options of the SOCP backend.
