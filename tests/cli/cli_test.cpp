@@ -300,5 +300,23 @@ TEST_F(CliTest, QuadrotorLimitsOnTheCommandLine) {
   EXPECT_THAT(r.output, HasSubstr("limits.min_thrust"));
 }
 
+// An infeasible start (3 m/s on the contract line, vmax 2): exit 3 with the cause in the result
+// JSON; with --relax-boundary exit 0, the start lowered to 2 m/s and the answer for it.
+TEST_F(CliTest, InfeasibleStartIsNamedAndRelaxed) {
+  Write("fast.json", R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]},
+    "limits": {"max_velocity": 2.0, "max_acceleration": 1.0},
+    "boundary": {"start_velocity": [3, 0, 0]}, "discretization": {"K": 20}})");
+  CliRun r = RunCli("temporal " + Path("fast.json") + " -o " + Path("f.json"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  std::string json = ReadTextFile(Path("f.json"));
+  EXPECT_THAT(json, HasSubstr("\"cause\": \"boundary_speed\""));
+  r = RunCli("temporal " + Path("fast.json") + " --relax-boundary -o " + Path("r.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  json = ReadTextFile(Path("r.json"));
+  EXPECT_NEAR(JsonNumber(json, "start_speed"), 2.0, 1e-9);
+  EXPECT_NEAR(JsonNumber(json, "start_violation"), 1.0, 1e-9);
+  EXPECT_NEAR(JsonNumber(json, "total_time"), 6.0, 1e-6);
+}
+
 }  // namespace
 }  // namespace timeopt

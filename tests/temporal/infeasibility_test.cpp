@@ -1,0 +1,110 @@
+// Why a temporal problem is infeasible (TemporalResult::infeasibility), and the closest feasible
+// answer (TemporalProblem::relax_boundary): hand-built cases with closed forms, both backends.
+
+#include <cmath>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "../common/fixtures.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+namespace {
+
+using ::testing::HasSubstr;
+using test_support::LinearPiece;
+using test_support::LineProblem;
+
+// A straight run of `run` metres along x into a right-angle corner (the vehicle stops there), then
+// 3 m along y; vmax 2, amax 1, starting at `speed` along x.
+TemporalProblem Corner(double run, double speed) {
+  TemporalProblem p;
+  p.curve = PiecewiseCurve({LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(run, 0.0, 0.0)),
+                            LinearPiece(Eigen::Vector3d(run, 0.0, 0.0), Eigen::Vector3d(run, 3.0, 0.0))});
+  p.limits.max_velocity.setConstant(2.0);
+  p.limits.max_acceleration.setConstant(1.0);
+  p.boundary.start_velocity = Eigen::Vector3d(speed, 0.0, 0.0);
+  p.cells_per_piece = 50;
+  return p;
+}
+
+TEST(Infeasibility, StartSpeedAboveTheLimitIsNamedAndRelaxedToTheLimit) {
+  TemporalProblem p = LineProblem(10.0, 20);
+  p.boundary.start_velocity = Eigen::Vector3d(3.0, 0.0, 0.0);  // vmax = 2
+  for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInfeasible);
+    ASSERT_TRUE(r.infeasibility.has_value()) << ToString(backend);
+    EXPECT_EQ(r.infeasibility->cause, "boundary_speed");
+    EXPECT_EQ(r.infeasibility->where, "start");
+    EXPECT_THAT(r.infeasibility->detail, HasSubstr("above the limit"));
+    // Relaxed: the closest start is vmax exactly; from it, 8 m cruise and 2 s of braking: T = 6.
+    TemporalProblem relaxed = p;
+    relaxed.relax_boundary = true;
+    const TemporalResult a = MakeTemporalSolver(backend)->Solve(relaxed);
+    ASSERT_TRUE(a.is_success()) << a.message;
+    ASSERT_TRUE(a.boundary_relaxation.has_value());
+    EXPECT_NEAR(a.boundary_relaxation->start_speed, 2.0, 1e-9);
+    EXPECT_NEAR(a.boundary_relaxation->start_speed_given, 3.0, 1e-12);
+    EXPECT_NEAR(a.total_time, 6.0, 1e-6);
+  }
+}
+
+// 1.9 m/s into a corner 1.5 m ahead with amax 1: braking needs 1.9^2 / 2 = 1.805 m. Braking fails
+// at the corner (within one cell, 0.03 m); the fastest start that can stop there is sqrt(2 a d) =
+// sqrt(3) m/s exactly (on a line the rows are exact at the grid points), and from it the answer is
+// braking all the way, sqrt(3) s, then the 3 m leg from rest to rest (amax 1, too short for vmax:
+// a triangle peaking at sqrt(3) m/s, 2 sqrt(3) s): 3 sqrt(3) s in all.
+TEST(Infeasibility, CornerTooCloseToBrakeIsLocatedAndRelaxedToTheClosedForm) {
+  const TemporalProblem p = Corner(1.5, 1.9);
+  for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << ToString(backend);
+    ASSERT_TRUE(r.infeasibility.has_value());
+    EXPECT_EQ(r.infeasibility->cause, "braking");
+    const std::string& where = r.infeasibility->where;
+    const double s = std::stod(where.substr(where.find("s = ") + 4));
+    EXPECT_NEAR(s, 1.5, 0.03 + 1e-9) << where;
+    TemporalProblem relaxed = p;
+    relaxed.relax_boundary = true;
+    const TemporalResult a = MakeTemporalSolver(backend)->Solve(relaxed);
+    ASSERT_TRUE(a.is_success()) << a.message;
+    EXPECT_NEAR(a.boundary_relaxation->start_speed, std::sqrt(3.0), 1e-9);
+    EXPECT_NEAR(a.total_time, 3.0 * std::sqrt(3.0), 1e-6);
+  }
+}
+
+// Far enough from the corner (10 m), the same start is feasible: no diagnosis, and relax_boundary
+// changes nothing.
+TEST(Infeasibility, FeasibleProblemsAreUntouched) {
+  TemporalProblem p = Corner(10.0, 1.9);
+  const TemporalResult plain = MakeSocpTemporalSolver()->Solve(p);
+  p.relax_boundary = true;
+  const TemporalResult relaxed = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_TRUE(plain.is_success()) << plain.message;
+  ASSERT_TRUE(relaxed.is_success()) << relaxed.message;
+  EXPECT_FALSE(plain.infeasibility.has_value());
+  EXPECT_FALSE(relaxed.boundary_relaxation.has_value());
+  EXPECT_DOUBLE_EQ(plain.total_time, relaxed.total_time);
+}
+
+// A boundary acceleration that lambda_a cannot bring to rest (1 m/s^2, changing by 1e-4 per
+// cell over 20 cells): named from the solver's verdict; not relaxed (the relaxation moves speeds).
+TEST(Infeasibility, UnreachableBoundaryAccelerationWithLambdaA) {
+  TemporalProblem p = LineProblem(10.0, 20);
+  p.limits.max_acceleration_change = 1e-4;
+  p.boundary.start_acceleration = Eigen::Vector3d(1.0, 0.0, 0.0);
+  p.relax_boundary = true;
+  for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << ToString(backend);
+    ASSERT_TRUE(r.infeasibility.has_value());
+    EXPECT_FALSE(r.boundary_relaxation.has_value());
+    EXPECT_FALSE(r.infeasibility->cause.empty());
+  }
+}
+
+}  // namespace
+}  // namespace timeopt
