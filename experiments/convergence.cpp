@@ -1,0 +1,246 @@
+// The paper's Fig. 4: convergence of the spatial stage with and without the time terms. Random
+// forest maps from the project's generator at several obstacle densities (trees per square metre,
+// 20 x 20 x 3 m, seeded), and per density N random start/goal pairs in free space at least 10 m
+// apart. Each pair is planned twice by the planner, whose front end gives both the same waypoints:
+// the decoupled spatial optimization (jerk in s, collision, length) and the time-coupled baseline
+// (time-parameterized, with its dynamic-feasibility terms), with the same Levenberg-Marquardt
+// budget (PlannerOptions::spatial). The optimizer's iteration records give the cost against time.
+//
+// Outputs in --out DIR: convergence.csv (one row per iteration per test), convergence_summary.csv
+// (per density and formulation: success rate, cost reduction reached within --budget-ms, median
+// time to converge, final clearance, smoothness = the integral of |jerk|^2 over the flight after
+// time allocation), convergence.png (normalized cost against time, median and quartiles),
+// convergence_density.png (cost reduction at the budget, clearance and smoothness against
+// density). Tests run in parallel on all cores, each timed on its own thread; progress on stderr.
+// Usage: experiment_convergence --out DIR [--tests N] [--budget-ms MS] [--densities D ...]
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "timeopt/map/esdf.h"
+#include "timeopt/map/map_generators.h"
+#include "timeopt/map/occupancy_map.h"
+#include "timeopt/planner/planner.h"
+#include "timeopt/trajectory/trajectory.h"
+#include "timeopt/viz/plot.h"
+
+namespace {
+
+using namespace timeopt;
+
+constexpr const char* kFormulationNames[2] = {"decoupled", "coupled"};
+constexpr SpatialFormulation kFormulations[2] = {SpatialFormulation::kSpatial, SpatialFormulation::kTimeCoupled};
+
+struct Run {
+  bool success = false;
+  std::vector<SpatialIteration> iterations;
+  double clearance = 0.0;
+  double smoothness = 0.0;  // integral of |jerk|^2 dt, m^2/s^5
+  double converge_ms = 0.0;
+};
+
+struct Test {
+  double density = 0.0;
+  int index = 0;
+  Run runs[2];
+};
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const size_t i = static_cast<size_t>(std::floor(pos));
+  const size_t j = std::min(i + 1, v.size() - 1);
+  return v[i] + (pos - static_cast<double>(i)) * (v[j] - v[i]);
+}
+
+// The normalized cost reached by `ms` of solver time (the initial cost / 1 when no iteration has).
+double NormalizedCostAt(const std::vector<SpatialIteration>& its, double ms) {
+  if (its.empty() || !(its.front().cost > 0.0)) return 1.0;
+  double c = its.front().cost;
+  for (const SpatialIteration& it : its) {
+    if (it.time_seconds * 1e3 > ms) break;
+    c = it.cost;
+  }
+  return c / its.front().cost;
+}
+
+Run PlanOnce(Planner& planner, const Eigen::Vector3d& start, const Eigen::Vector3d& goal, SpatialFormulation f) {
+  PlannerOptions options;
+  options.spatial.formulation = f;
+  options.limits.max_jerk.reset();  // the paper's evaluation: no jerk limit
+  const PlanResult plan = planner.Plan(start, goal, options);
+  Run run;
+  run.iterations = plan.spatial.iterations;
+  run.success = plan.is_success();
+  run.converge_ms = plan.spatial.solve_time_seconds * 1e3;
+  if (run.success) {
+    run.clearance = plan.min_clearance;
+    const std::vector<TrajectoryState> samples = Trajectory(plan.curve, plan.temporal.profile).Sample(1000.0);
+    for (size_t k = 0; k + 1 < samples.size(); ++k) {
+      run.smoothness += samples[k].jerk.squaredNorm() * (samples[k + 1].t - samples[k].t);
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Spatial-stage convergence with and without the time terms (paper Fig. 4)"};
+  std::string out = "results/experiments";
+  int tests = 500;
+  double budget_ms = 50.0;
+  std::vector<double> densities = {0.05, 0.1, 0.15, 0.2};
+  unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  app.add_option("--out", out, "Output directory")->capture_default_str();
+  app.add_option("--tests", tests, "Start/goal pairs per density")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--budget-ms", budget_ms, "Solver time at which the cost reduction is read, ms")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--densities", densities, "Trees per square metre")->capture_default_str();
+  app.add_option("--threads", threads, "Worker threads (each test timed on its own)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  std::filesystem::create_directories(out);
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  std::vector<Test> all;
+  for (size_t di = 0; di < densities.size(); ++di) {
+    ForestOptions forest;
+    forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(20, 20, 3));
+    forest.density = densities[di];
+    forest.seed = 100 + di;
+    const OccupancyMap map = OccupancyMap::FromGrid(GenerateForest(forest));
+    const Esdf esdf = Esdf::FromMap(map);
+    // Start/goal pairs: seeded, in free space (1 m from obstacles), at least 10 m apart, at 1.5 m.
+    std::mt19937 rng(static_cast<unsigned>(7 + di));
+    std::uniform_real_distribution<double> u(1.0, 19.0);
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;
+    while (static_cast<int>(pairs.size()) < tests) {
+      const Eigen::Vector3d a(u(rng), u(rng), 1.5), b(u(rng), u(rng), 1.5);
+      if ((a - b).norm() < 10.0 || esdf.Distance(a) < 1.0 || esdf.Distance(b) < 1.0) continue;
+      pairs.emplace_back(a, b);
+    }
+    std::vector<Test> results(static_cast<size_t>(tests));
+    std::atomic<int> next{0}, done{0};
+    std::mutex progress;
+    const auto worker = [&] {
+      Planner planner(esdf);
+      for (int t = next++; t < tests; t = next++) {
+        Test& test = results[static_cast<size_t>(t)];
+        test.density = densities[di];
+        test.index = t;
+        for (int f = 0; f < 2; ++f) test.runs[f] = PlanOnce(planner, pairs[static_cast<size_t>(t)].first,
+                                                           pairs[static_cast<size_t>(t)].second, kFormulations[f]);
+        const int count = ++done;
+        if (count % 25 == 0 || count == tests) {
+          std::lock_guard<std::mutex> lock(progress);
+          std::cerr << "density " << densities[di] << ": " << count << "/" << tests << " tests, "
+                    << std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()
+                    << " s\n";
+        }
+      }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned k = 0; k < std::min<unsigned>(threads, static_cast<unsigned>(tests)); ++k) pool.emplace_back(worker);
+    for (std::thread& th : pool) th.join();
+    all.insert(all.end(), results.begin(), results.end());
+  }
+
+  std::ofstream csv(out + "/convergence.csv");
+  csv << "density,test,formulation,time_ms,iteration,cost,normalized_cost\n";
+  for (const Test& t : all) {
+    for (int f = 0; f < 2; ++f) {
+      const auto& its = t.runs[f].iterations;
+      const double initial = its.empty() || !(its.front().cost > 0.0) ? 1.0 : its.front().cost;
+      for (const SpatialIteration& it : its) {
+        csv << t.density << "," << t.index << "," << kFormulationNames[f] << "," << it.time_seconds * 1e3 << ","
+            << it.iteration << "," << it.cost << "," << it.cost / initial << "\n";
+      }
+    }
+  }
+  std::ofstream summary(out + "/convergence_summary.csv");
+  summary << "density,formulation,tests,success_rate,median_cost_reduction,q1_cost_reduction,q3_cost_reduction,"
+             "median_converge_ms,median_clearance,median_smoothness\n";
+  std::vector<double> reduction_med[2], clearance_med[2], smooth_med[2];
+  for (double density : densities) {
+    for (int f = 0; f < 2; ++f) {
+      std::vector<double> reduction, converge, clearance, smooth;
+      int success = 0, count = 0;
+      for (const Test& t : all) {
+        if (t.density != density) continue;
+        const Run& r = t.runs[f];
+        ++count;
+        reduction.push_back(1.0 - NormalizedCostAt(r.iterations, budget_ms));
+        converge.push_back(r.converge_ms);
+        if (r.success) {
+          ++success;
+          clearance.push_back(r.clearance);
+          smooth.push_back(r.smoothness);
+        }
+      }
+      summary << density << "," << kFormulationNames[f] << "," << count << ","
+              << static_cast<double>(success) / std::max(1, count) << "," << Quantile(reduction, 0.5) << ","
+              << Quantile(reduction, 0.25) << "," << Quantile(reduction, 0.75) << "," << Quantile(converge, 0.5)
+              << "," << Quantile(clearance, 0.5) << "," << Quantile(smooth, 0.5) << "\n";
+      reduction_med[f].push_back(Quantile(reduction, 0.5));
+      clearance_med[f].push_back(Quantile(clearance, 0.5));
+      smooth_med[f].push_back(Quantile(smooth, 0.5));
+    }
+  }
+
+  // Normalized cost against time, median and quartiles on a common time grid, per density.
+  const std::array<double, 3> colors[2] = {{0.15, 0.35, 0.85}, {0.85, 0.25, 0.15}};
+  std::vector<PlotPanel> panels;
+  for (double density : densities) {
+    PlotPanel panel;
+    std::ostringstream title;
+    title << "density " << density << " trees/m^2: cost / initial cost (median, dashed quartiles)";
+    panel.title = title.str();
+    panel.x_label = "solver time (ms)";
+    panel.y_label = "normalized cost";
+    for (int f = 0; f < 2; ++f) {
+      std::vector<double> x, med, q1, q3;
+      for (int k = 0; k <= 50; ++k) {
+        const double ms = budget_ms * k / 50.0;
+        std::vector<double> at;
+        for (const Test& t : all) {
+          if (t.density == density) at.push_back(NormalizedCostAt(t.runs[f].iterations, ms));
+        }
+        x.push_back(ms);
+        med.push_back(Quantile(at, 0.5));
+        q1.push_back(Quantile(at, 0.25));
+        q3.push_back(Quantile(at, 0.75));
+      }
+      panel.series.push_back({kFormulationNames[f], x, med, colors[f], false});
+      panel.series.push_back({"", x, q1, colors[f], true});
+      panel.series.push_back({"", x, q3, colors[f], true});
+    }
+    panels.push_back(panel);
+  }
+  WritePlotPng(panels, out + "/convergence.png");
+  PlotPanel reduction{"cost reduction reached in the budget (median)", "density (trees/m^2)", "1 - cost/initial", {}};
+  PlotPanel clearance{"final minimum clearance (median)", "density (trees/m^2)", "m", {}};
+  PlotPanel smoothness{"smoothness: integral of |jerk|^2 over the flight (median)", "density (trees/m^2)", "m^2/s^5", {}};
+  for (int f = 0; f < 2; ++f) {
+    reduction.series.push_back({kFormulationNames[f], densities, reduction_med[f], colors[f], false});
+    clearance.series.push_back({kFormulationNames[f], densities, clearance_med[f], colors[f], false});
+    smoothness.series.push_back({kFormulationNames[f], densities, smooth_med[f], colors[f], false});
+  }
+  WritePlotPng({reduction, clearance, smoothness}, out + "/convergence_density.png");
+  std::cout << "experiment_convergence: " << all.size() << " tests per formulation, written to " << out << "\n";
+  return 0;
+}
