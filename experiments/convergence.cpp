@@ -4,7 +4,8 @@
 // apart. Each pair is planned twice by the planner, whose front end gives both the same waypoints:
 // the decoupled spatial optimization (jerk in s, collision, length) and the time-coupled baseline
 // (time-parameterized, with its dynamic-feasibility terms), with the same Levenberg-Marquardt
-// budget (PlannerOptions::spatial). The optimizer's iteration records give the cost against time.
+// budget (100 iterations; no wall-clock limit, so runs are deterministic but for their timings).
+// The optimizer's iteration records give the cost against time.
 //
 // Outputs in --out DIR: convergence.csv (one row per iteration per test), convergence_summary.csv
 // (per density and formulation: success rate, cost reduction reached within --budget-ms, median
@@ -81,6 +82,9 @@ double NormalizedCostAt(const std::vector<SpatialIteration>& its, double ms) {
 Run PlanOnce(Planner& planner, const Eigen::Vector3d& start, const Eigen::Vector3d& goal, SpatialFormulation f) {
   PlannerOptions options;
   options.spatial.formulation = f;
+  // The same budget for both: the iteration limit (100). No wall-clock limit, so that a run is
+  // deterministic whatever the machine's load (the forest plans converge in 10-40 iterations).
+  options.spatial.max_solver_time_in_seconds = 10.0;
   options.limits.max_jerk.reset();  // the paper's evaluation: no jerk limit
   const PlanResult plan = planner.Plan(start, goal, options);
   Run run;
