@@ -71,6 +71,21 @@ void TemporalProblem::Validate() const {
                                   " m, above the supported 1e100 m");
     }
   }
+  // The pieces must meet (C0): a gap between them would be flown as a jump. The tolerance is
+  // relative to the curve's size (the largest distance of a joint from the start, and 1 m): fitted
+  // curves meet to rounding, ~1e-12 relative.
+  double size = 0.0;
+  const Eigen::Vector3d origin = curve.Evaluate(0, 0.0);
+  for (int i = 0; i < curve.num_pieces(); ++i) size = std::max(size, (curve.Evaluate(i, 1.0) - origin).norm());
+  constexpr double kJointGapTolerance = 1e-9;
+  for (int i = 0; i + 1 < curve.num_pieces(); ++i) {
+    const double gap = (curve.Evaluate(i + 1, 0.0) - curve.Evaluate(i, 1.0)).norm();
+    if (!(gap <= kJointGapTolerance * std::max(1.0, size))) {
+      throw std::invalid_argument("curve.pieces[" + std::to_string(i + 1) + "]: starts " + Num(gap) +
+                                  " m from where curve.pieces[" + std::to_string(i) +
+                                  "] ends (the pieces must meet)");
+    }
+  }
   for (int a = 0; a < 3; ++a) {
     CheckPositiveOrNone(limits.max_velocity(a), "limits.max_velocity[" + std::to_string(a) + "]");
     CheckPositiveOrNone(limits.max_acceleration(a), "limits.max_acceleration[" + std::to_string(a) + "]");

@@ -106,5 +106,19 @@ TEST(Infeasibility, UnreachableBoundaryAccelerationWithLambdaA) {
   }
 }
 
+// Pieces that do not meet (piece 1 starts 4 m from where piece 0 ends) are invalid input naming
+// the piece and the gap, from both backends (they used to be solved as if joined, and the samples
+// jumped 4 m).
+TEST(CurveValidation, PiecesThatDoNotMeetAreInvalidInput) {
+  TemporalProblem p = LineProblem(10.0, 10);
+  p.curve = PiecewiseCurve({LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(5.0, 0.0, 0.0)),
+                            LinearPiece(Eigen::Vector3d(5.0, 4.0, 0.0), Eigen::Vector3d(10.0, 4.0, 0.0))});
+  for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput) << ToString(backend);
+    EXPECT_THAT(r.message, HasSubstr("curve.pieces[1]: starts 4 m from where curve.pieces[0] ends"));
+  }
+}
+
 }  // namespace
 }  // namespace timeopt
