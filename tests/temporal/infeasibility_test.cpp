@@ -120,5 +120,25 @@ TEST(CurveValidation, PiecesThatDoNotMeetAreInvalidInput) {
   }
 }
 
+// Units do not change the answer: the contract line (10 m, vmax 2, amax 1: 7 s) written in units
+// from micrometres to 100 km (lengths and limits scaled by c) gives 7 s to 1e-9 relative, in both
+// modes and with both backends (the SOCP backend's structured path normalizes its rows; the conic
+// solver alone called some of these infeasible, issue 23).
+TEST(ScaleInvariance, TheContractLineInAnyUnitTakesSevenSeconds) {
+  for (const double c : {1e-6, 1e-3, 1.0, 1e3, 1e5}) {
+    TemporalProblem p = LineProblem(10.0 * c, 50);
+    p.limits.max_velocity.setConstant(2.0 * c);
+    p.limits.max_acceleration.setConstant(1.0 * c);
+    for (const ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
+      p.constraint_mode = mode;
+      for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+        const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+        ASSERT_TRUE(r.is_success()) << c << " " << ToString(mode) << " " << ToString(backend) << ": " << r.message;
+        EXPECT_NEAR(r.total_time, 7.0, 7e-9) << c << " " << ToString(mode) << " " << ToString(backend);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace timeopt
