@@ -8,6 +8,9 @@
 namespace timeopt {
 
 std::string ReadTextFile(const std::string& path) {
+  // A directory opens as a stream on Linux and then fails with a bare "basic_filebuf::underflow".
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw FileError("'" + path + "' is a directory, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError("cannot open '" + path + "' for reading");
   std::ostringstream ss;

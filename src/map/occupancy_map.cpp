@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iterator>
@@ -178,6 +179,8 @@ class StreamChecker {
 };
 
 std::string ReadWholeFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw FileError("map file '" + path + "' is a directory");
   std::ifstream file(path, std::ios::binary);
   if (!file) throw FileError("cannot open map file '" + path + "'");
   std::string content((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());

@@ -22,8 +22,10 @@ namespace timeopt::internal {
 
 using Rgb = std::array<double, 3>;
 
-// Piecewise-linear colour map through five equally spaced stops; t is clamped to [0, 1].
+// Piecewise-linear colour map through five equally spaced stops; t is clamped to [0, 1] (NaN, from
+// inf / inf on a map of absurd resolution, counts as 0: it used to index the stops out of range).
 inline Rgb InterpolateStops(const double (&stops)[5][3], double t) {
+  if (std::isnan(t)) t = 0.0;
   t = std::clamp(t, 0.0, 1.0) * 4.0;
   const int i = std::min(static_cast<int>(t), 3);
   const double f = t - i;

@@ -318,5 +318,16 @@ TEST_F(CliTest, InfeasibleStartIsNamedAndRelaxed) {
   EXPECT_NEAR(JsonNumber(json, "total_time"), 6.0, 1e-6);
 }
 
+// A directory where a file is expected: exit 2 naming it (it was exit 1 with
+// "basic_filebuf::underflow" for maps and "malformed JSON" for problems).
+TEST_F(CliTest, ADirectoryAsInputIsNamed) {
+  const std::string dir = Path("");
+  for (const std::string& command : {"temporal " + dir, "map info " + dir, "plan --config " + dir}) {
+    const CliRun r = RunCli(command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+    EXPECT_THAT(r.output, HasSubstr("is a directory")) << command;
+  }
+}
+
 }  // namespace
 }  // namespace timeopt
