@@ -104,11 +104,21 @@ double PiecewiseCurve::ArcLength(double tolerance) const {
     const auto speed = [&p](double s) { return p.Evaluate(s, 1).norm(); };
     // Start from four panels so that a symmetric integrand cannot fool the first estimate.
     const int panels = 4;
+    double fa[panels], fm[panels], fb[panels], whole[panels], estimate = 0.0;
     for (int k = 0; k < panels; ++k) {
       const double a = static_cast<double>(k) / panels, b = static_cast<double>(k + 1) / panels;
-      const double fa = speed(a), fb = speed(b), fm = speed(0.5 * (a + b));
-      const double whole = (b - a) / 6.0 * (fa + 4.0 * fm + fb);
-      total += AdaptiveSimpson(speed, a, b, fa, fm, fb, whole, per_piece / panels, 0);
+      fa[k] = speed(a);
+      fb[k] = speed(b);
+      fm[k] = speed(0.5 * (a + b));
+      whole[k] = (b - a) / 6.0 * (fa[k] + 4.0 * fm[k] + fb[k]);
+      estimate += whole[k];
+    }
+    // Not below 1e-13 of the piece's length: there the differences are the rounding of |f'| (on a
+    // curve 1e8 m long a 1e-9 m tolerance was never met, and the recursion went 2^40 wide: a hang).
+    const double piece_tolerance = std::max(per_piece, 1e-13 * std::abs(estimate));
+    for (int k = 0; k < panels; ++k) {
+      const double a = static_cast<double>(k) / panels, b = static_cast<double>(k + 1) / panels;
+      total += AdaptiveSimpson(speed, a, b, fa[k], fm[k], fb[k], whole[k], piece_tolerance / panels, 0);
     }
   }
   return total;

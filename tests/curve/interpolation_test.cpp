@@ -140,5 +140,25 @@ TEST(Interpolation, RejectsBadInput) {
   EXPECT_THROW(MinimumJerkSpline(Waypoints::Random(3, 2), EndDerivatives{}), std::invalid_argument);
 }
 
+// A curve 1e8 m long: the 1e-9 m default tolerance is below the rounding of |f'| there. The
+// quadrature stops at 1e-13 of each piece's length (it used to recurse 2^40 wide: a hang) and
+// agrees with composite Simpson on 2e5 panels per piece to 1e-9 relative.
+TEST(PiecewiseCurveArcLength, HugeCurvesTerminateAndAreAccurate) {
+  Waypoints w(3, 3);
+  w << 0, 1e8, 2e8, 0, 1e8, 0, 0, 0, 1e8;
+  const PiecewiseCurve c = MinimumJerkSpline(w);
+  double reference = 0.0;
+  constexpr int kPanels = 200000;
+  for (int i = 0; i < c.num_pieces(); ++i) {
+    const double h = 1.0 / kPanels;
+    for (int k = 0; k < kPanels; ++k) {
+      const double a = k * h;
+      reference += h / 6.0 * (c.Evaluate(i, a, 1).norm() + 4.0 * c.Evaluate(i, a + 0.5 * h, 1).norm() +
+                              c.Evaluate(i, a + h, 1).norm());
+    }
+  }
+  EXPECT_NEAR(c.ArcLength(1e-9), reference, 1e-9 * reference);
+}
+
 }  // namespace
 }  // namespace timeopt

@@ -47,7 +47,9 @@ class PiecewiseCurve {
   ContinuityReport Continuity(int max_order = 4) const;
 
   // Arc length integral of |f'(s)| over all pieces, by adaptive Simpson quadrature with the given
-  // absolute tolerance (metres). Throws std::invalid_argument for a tolerance that is not positive.
+  // absolute tolerance (metres), or 1e-13 of each piece's length (the rounding of doubles) where
+  // that is larger.
+  // Throws std::invalid_argument for a tolerance that is not positive.
   double ArcLength(double tolerance = 1e-9) const;
 
   // Sum over pieces of the exact integral of |f^(order)(s)|^2 ds.
