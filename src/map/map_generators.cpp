@@ -45,12 +45,20 @@ void ForEachVoxel(const OccupancyGrid& grid, Visit&& visit) {
 
 }  // namespace
 
+// The most trees or boxes a generator places (see ForestOptions::Validate).
+constexpr double kMaxGeneratedObstacles = 1e6;
+
 void ForestOptions::Validate() const {
   ValidateBoundsAndResolution(bounds, resolution);
   Require(std::isfinite(density) && density >= 0.0, "forest density must be >= 0 (trees per m^2)");
   Require(std::isfinite(min_radius) && min_radius > 0.0, "forest min_radius must be positive");
   Require(std::isfinite(max_radius) && max_radius >= min_radius,
           "forest max_radius must be >= min_radius");
+  // Each tree costs a pass over its voxel columns: a cap keeps absurd densities from running for
+  // hours (1e6 trees: minutes at most; a 10 x 10 m forest at 1 tree/m^2 has 100).
+  const Eigen::Vector3d size = bounds.sizes();
+  Require(density * size.x() * size.y() <= kMaxGeneratedObstacles,
+          "forest density gives more than 1e6 trees in the bounds");
 }
 
 void SharpTurnOptions::Validate() const {
@@ -88,7 +96,7 @@ Eigen::AlignedBox3d SharpTurnOptions::Bounds() const {
 
 void RandomBoxesOptions::Validate() const {
   ValidateBoundsAndResolution(bounds, resolution);
-  Require(count >= 0, "boxes count must be >= 0");
+  Require(count >= 0 && count <= kMaxGeneratedObstacles, "boxes count must be in [0, 1e6]");
   Require(std::isfinite(min_size) && min_size > 0.0, "boxes min_size must be positive");
   Require(std::isfinite(max_size) && max_size >= min_size, "boxes max_size must be >= min_size");
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 #include "timeopt/map/esdf.h"
 
@@ -82,4 +83,15 @@ TEST(MapGeneratorsTest, RandomBoxesFillTheirVoxels) {
 }
 
 }  // namespace
+// Absurd counts are refused before any work (they used to run for hours): more than 1e6 trees
+// (1e5 per m^2 on 100 m^2) or boxes.
+TEST(MapGeneratorsTest, AbsurdCountsAreRefused) {
+  ForestOptions forest;
+  forest.density = 1e5;
+  EXPECT_THROW(GenerateForest(forest), std::invalid_argument);
+  RandomBoxesOptions boxes;
+  boxes.count = 2000000;
+  EXPECT_THROW(GenerateRandomBoxes(boxes), std::invalid_argument);
+}
+
 }  // namespace timeopt
