@@ -42,6 +42,7 @@ constexpr const char* kDefaultPlot = "results/plan.png";
 
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
+  std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
   QuadrotorLimitArgs quadrotor;  // in addition to the per-axis limits the planner needs
@@ -86,6 +87,10 @@ int RunPlan(PlanArgs args) {
     else options.limits.max_jerk.reset();
   }
   ApplyQuadrotorLimits(args.quadrotor, &options.limits);
+  if (!args.start_velocity.empty()) options.start_velocity = ParsePoint(args.start_velocity, "--start-velocity");
+  if (!args.start_acceleration.empty()) {
+    options.start_acceleration = ParsePoint(args.start_acceleration, "--start-acceleration");
+  }
   if (args.robot_radius) options.robot_radius = *args.robot_radius;
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("options: " + error);
@@ -129,10 +134,11 @@ int RunPlan(PlanArgs args) {
   const bool ok = plan.is_success();
   if (ok) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
-    // The trajectory flown by the default jerk-input quadrotor from a hover (see `timeopt simulate`).
+    // The trajectory flown by the default jerk-input quadrotor from the start state (a hover unless
+    // --start-velocity / --start-acceleration; see `timeopt simulate`).
     try {
-      const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(trajectory, options.limits,
-                                                          Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+      const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(
+          trajectory, options.limits, options.start_velocity, options.start_acceleration);
       summary["flight"] = {{"feasible", flight.feasible},
                            {"max_velocity_ratio", flight.max_velocity_ratio},
                            {"max_acceleration_ratio", flight.max_acceleration_ratio},
@@ -199,6 +205,10 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
   // The quadrotor's limits apply with the per-axis ones (the front end and the spatial stage size
   // the path by those).
   AddQuadrotorLimitOptions(sub, &args->quadrotor);
+  sub->add_option("--start-velocity", args->start_velocity,
+                  "The vehicle's velocity at the start, x,y,z m/s (re-planning in flight; default: at rest)");
+  sub->add_option("--start-acceleration", args->start_acceleration,
+                  "The vehicle's acceleration at the start, x,y,z m/s^2 (default: 0)");
   sub->add_option("--robot-radius", args->robot_radius,
                   "Robot radius, metres" + shown(defaults.robot_radius))
       ->check(CLI::NonNegativeNumber);

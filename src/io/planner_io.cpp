@@ -212,6 +212,11 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
   ratio("max_thrust_ratio", plan.temporal.max_thrust_ratio);
   ratio("min_thrust_ratio", plan.temporal.min_thrust_ratio);
   ratio("max_tilt_ratio", plan.temporal.max_tilt_ratio);
+  if (plan.temporal.boundary_relaxation) {
+    // A start in motion too fast for the new curve: flown at the closest start speed instead.
+    j["boundary_relaxation"] = {{"start_speed_given", plan.temporal.boundary_relaxation->start_speed_given},
+                                {"start_speed", plan.temporal.boundary_relaxation->start_speed}};
+  }
   j["time_ms"] = {{"search", plan.times.search_ms},
                   {"spatial", plan.times.spatial_ms},
                   {"check", plan.times.check_ms},

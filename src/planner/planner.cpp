@@ -64,6 +64,12 @@ bool PlannerOptions::IsValid(std::string* error) const {
   if (!std::isfinite(robot_radius) || robot_radius < 0.0) {
     return fail("robot_radius", "a finite number >= 0 (metres)", robot_radius);
   }
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(start_velocity(a))) return fail("start_velocity", "finite numbers (m/s)", start_velocity(a));
+    if (!std::isfinite(start_acceleration(a))) {
+      return fail("start_acceleration", "finite numbers (m/s^2)", start_acceleration(a));
+    }
+  }
   if (!std::isfinite(safety_margin) || safety_margin <= 0.0) {
     return fail("safety_margin", "a positive number (metres)", safety_margin);
   }
@@ -233,6 +239,18 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     spatial.max_velocity = options.limits.max_velocity.minCoeff();
     spatial.max_acceleration = options.limits.max_acceleration.minCoeff();
   }
+  // A start in motion: in s, f'(0) = v0 tau and f''(0) = a0 tau^2 give sdot = 1 / tau, the
+  // velocity v0 and (with sddot = 0) the acceleration a0. tau: the first front-end segment at the
+  // start speed (at the velocity limit for a start at rest with an acceleration).
+  const bool moving = !options.start_velocity.isZero(0.0) || !options.start_acceleration.isZero(0.0);
+  if (moving) {
+    const double first = path.waypoints.cols() > 1 ? (path.waypoints.col(1) - path.waypoints.col(0)).norm() : 1.0;
+    const double speed = options.start_velocity.norm() > 0.0 ? options.start_velocity.norm()
+                                                               : options.limits.max_velocity.minCoeff();
+    const double tau = spatial.formulation == SpatialFormulation::kTimeCoupled ? 1.0 : std::max(first, 1e-3) / speed;
+    spatial.start_tangent = options.start_velocity * tau;
+    spatial.start_curvature = options.start_acceleration * tau * tau;
+  }
   // Exact against the voxels where the field is below radius + check margin; between samples the
   // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
   // less than radius + half a step lowers the requirement to its own clearance (never below the
@@ -290,6 +308,9 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   problem.cells_per_piece = options.temporal_cells_per_piece;
   problem.rho = options.rho;
   problem.constraint_mode = options.constraint_mode;
+  problem.boundary.start_velocity = options.start_velocity;
+  problem.boundary.start_acceleration = options.start_acceleration;
+  problem.relax_boundary = moving;
   t = Clock::now();
   // One solver per planner, kept while its options stay the same, so that a re-plan reuses its
   // workspace (the conic solver's symbolic analysis when the sparsity pattern repeats).

@@ -86,6 +86,10 @@ bool SpatialOptimizerOptions::IsValid(std::string* error) const {
     return fail("collision_samples_per_piece", "an integer in [1, 64]", collision_samples_per_piece);
   }
   if (!Positive(tangent_epsilon)) return fail("tangent_epsilon", "a positive number", tangent_epsilon);
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(start_tangent(a))) return fail("start_tangent", "finite numbers", start_tangent(a));
+    if (!std::isfinite(start_curvature(a))) return fail("start_curvature", "finite numbers", start_curvature(a));
+  }
   if (max_iterations < 0) return fail("max_iterations", "an integer >= 0", max_iterations);
   if (!Positive(max_solver_time_in_seconds)) {
     return fail("max_solver_time_in_seconds", "a positive number", max_solver_time_in_seconds);
@@ -138,14 +142,25 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     result.durations = durations;
   }
 
-  // Initial joint states from the minimum-jerk spline in s (rest to rest).
-  const PiecewiseCurve initial = MinimumJerkSpline(waypoints);
+  // Initial joint states from the minimum-jerk spline in s (rest to rest, or from the given start
+  // derivatives).
+  EndDerivatives ends = EndDerivatives::RestToRest();
+  if (!coupled) {
+    ends.start_velocity = options.start_tangent;
+    ends.start_acceleration = options.start_curvature;
+  }
+  const PiecewiseCurve initial = MinimumJerkSpline(waypoints, ends);
   std::vector<double> joints(static_cast<size_t>(kJointSize) * (m + 1), 0.0);
   for (int j = 0; j <= m; ++j) {
     double* x = &joints[static_cast<size_t>(kJointSize) * j];
     Eigen::Map<Eigen::Vector3d> position(x);
     position = waypoints.col(j);
-    if (j == 0 || j == m) continue;  // rest at the fixed ends
+    if (j == 0) {  // the fixed start: at rest, or in motion
+      Eigen::Map<Eigen::Vector3d>(x + 3, 3) = options.start_tangent;
+      Eigen::Map<Eigen::Vector3d>(x + 6, 3) = options.start_curvature;
+      continue;
+    }
+    if (j == m) continue;  // rest at the fixed goal
     Eigen::Vector3d d1 = initial.Evaluate(j, 0.0, 1), d2 = initial.Evaluate(j, 0.0, 2);
     if (coupled) {
       const double t = 0.5 * (durations[j - 1] + durations[j]);
@@ -258,7 +273,7 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     result.message = summary.message;
     if (!summary.IsSolutionUsable()) result.status = SpatialStatus::kFailure;
   } else {
-    // One piece between fixed rest states: nothing to optimize.
+    // One piece between fixed end states: nothing to optimize.
     result.status = SpatialStatus::kConverged;
     result.message = "no free joint";
     result.iterations.push_back({0, result.initial_cost.total(), result.initial_cost.total(), 0.0, true});

@@ -41,6 +41,15 @@ inline VehicleLimits DefaultPlannerLimits() {
 }
 
 struct PlannerOptions {
+  // The vehicle's state at the start, m/s and m/s^2: zero for a start at rest (hover). A start in
+  // motion (re-planning in flight) makes the curve leave the start along the velocity, with the
+  // curvature that gives the acceleration, and the temporal stage start at that state; if the
+  // limits cannot be met from it (too fast for what lies ahead), the temporal stage answers with
+  // the closest start speed it can fly (TemporalProblem::relax_boundary; the paper's and certified
+  // rows without a jerk limit), and the plan says so.
+  Eigen::Vector3d start_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d start_acceleration = Eigen::Vector3d::Zero();
+
   // Radius of the sphere around the curve that must stay free, metres. The search never enters a
   // voxel closer than this and the post-check rejects any curve that comes closer.
   double robot_radius = 0.3;

@@ -55,6 +55,13 @@ enum class SpatialLinearSolver {
 struct SpatialOptimizerOptions {
   SpatialFormulation formulation = SpatialFormulation::kSpatial;
 
+  // The curve's first and second derivative at the start, held fixed like the start itself: zero
+  // for a start at rest (the default); for a start in motion (re-planning), the tangent along the
+  // velocity and the curvature that gives the acceleration. In s for the spatial formulation, in
+  // the first piece's time (m/s, m/s^2) for the time-coupled one.
+  Eigen::Vector3d start_tangent = Eigen::Vector3d::Zero();
+  Eigen::Vector3d start_curvature = Eigen::Vector3d::Zero();
+
   // w_s: weight of the jerk integral (m^2 per unit s^5). 1: the reference scale; the other weights
   // are relative to it.
   double smoothness_weight = 1.0;
