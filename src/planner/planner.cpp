@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -243,13 +244,29 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   // velocity v0 and (with sddot = 0) the acceleration a0. tau: the first front-end segment at the
   // start speed (at the velocity limit for a start at rest with an acceleration).
   const bool moving = !options.start_velocity.isZero(0.0) || !options.start_acceleration.isZero(0.0);
+  // A vehicle tracking at its limits overshoots them by a fraction of a percent (the flight
+  // criterion allows 1%): a start state a little over them is scaled onto them, or no profile
+  // could start there. More than 1% over is taken as given (and the temporal stage says why it
+  // cannot be flown, or relaxes it).
+  const auto onto_limits = [](const Eigen::Vector3d& value, const Eigen::Vector3d& per_axis,
+                              const std::optional<double>& norm) {
+    double factor = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(value(a)) > per_axis(a)) factor = std::min(factor, per_axis(a) / std::abs(value(a)));
+    }
+    if (norm && value.norm() > *norm) factor = std::min(factor, *norm / value.norm());
+    return factor >= 1.0 / 1.01 ? Eigen::Vector3d(value * factor) : value;
+  };
+  const Eigen::Vector3d start_velocity =
+      onto_limits(options.start_velocity, options.limits.max_velocity, options.limits.max_speed);
+  const Eigen::Vector3d start_acceleration = onto_limits(
+      options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
   if (moving) {
     const double first = path.waypoints.cols() > 1 ? (path.waypoints.col(1) - path.waypoints.col(0)).norm() : 1.0;
-    const double speed = options.start_velocity.norm() > 0.0 ? options.start_velocity.norm()
-                                                               : options.limits.max_velocity.minCoeff();
+    const double speed = start_velocity.norm() > 0.0 ? start_velocity.norm() : options.limits.max_velocity.minCoeff();
     const double tau = spatial.formulation == SpatialFormulation::kTimeCoupled ? 1.0 : std::max(first, 1e-3) / speed;
-    spatial.start_tangent = options.start_velocity * tau;
-    spatial.start_curvature = options.start_acceleration * tau * tau;
+    spatial.start_tangent = start_velocity * tau;
+    spatial.start_curvature = start_acceleration * tau * tau;
   }
   // Exact against the voxels where the field is below radius + check margin; between samples the
   // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
@@ -308,8 +325,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   problem.cells_per_piece = options.temporal_cells_per_piece;
   problem.rho = options.rho;
   problem.constraint_mode = options.constraint_mode;
-  problem.boundary.start_velocity = options.start_velocity;
-  problem.boundary.start_acceleration = options.start_acceleration;
+  problem.boundary.start_velocity = start_velocity;
+  problem.boundary.start_acceleration = start_acceleration;
   problem.relax_boundary = moving;
   t = Clock::now();
   // One solver per planner, kept while its options stay the same, so that a re-plan reuses its

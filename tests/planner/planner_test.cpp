@@ -12,6 +12,8 @@
 
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
+#include "timeopt/trajectory/trajectory.h"
+#include "timeopt/sim/quadrotor_sim.h"
 
 #include "../common/map_fixtures.h"
 
@@ -112,6 +114,31 @@ TEST(Planner, MapsSearchStatusesAndValidatesNestedOptions) {
   // The same planner then plans with valid options (its solver is remade for them).
   ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, PlannerOptions()));
   EXPECT_TRUE(r2.is_success()) << r2.message;
+}
+
+// A start in motion (issue 21's re-planning): the plan leaves the start with the vehicle's
+// velocity and acceleration (the trajectory's state at t = 0 is the given one, to the solvers'
+// tolerances), and the jerk-input quadrotor flies it from that state within 1% of the limits.
+TEST(Planner, AStartInMotionIsFlownFromThatState) {
+  const ForestFixture forest(5, 0.08);
+  Planner planner(*forest.esdf);
+  std::mt19937 rng(3);
+  const Eigen::Vector3d start = FreePoint(*forest.esdf, &rng, 1.0, 1.0, 2.0);
+  const Eigen::Vector3d goal = FreePoint(*forest.esdf, &rng, 1.0, 8.0, 9.0);
+  PlannerOptions options;  // certified rows, jerk 10 m/s^3
+  options.start_velocity = 0.8 * (goal - start).normalized();
+  options.start_acceleration = 0.3 * (goal - start).normalized() + Eigen::Vector3d(0.0, 0.0, 0.1);
+  const PlanResult plan = planner.Plan(start, goal, options);
+  ASSERT_TRUE(plan.is_success()) << plan.message;
+  const Trajectory trajectory(plan.curve, plan.temporal.profile);
+  const TrajectoryState first = trajectory.Evaluate(0.0);
+  EXPECT_LT((first.velocity - options.start_velocity).norm(), 1e-6);
+  EXPECT_LT((first.acceleration - options.start_acceleration).norm(), 1e-5);
+  QuadrotorSimOptions flight;
+  flight.limit_tolerance = 0.01;
+  const FeasibilityReport report =
+      QuadrotorSim(flight).Fly(trajectory, options.limits, options.start_velocity, options.start_acceleration);
+  EXPECT_TRUE(report.feasible) << report.message;
 }
 
 }  // namespace

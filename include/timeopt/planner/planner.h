@@ -46,7 +46,8 @@ struct PlannerOptions {
   // curvature that gives the acceleration, and the temporal stage start at that state; if the
   // limits cannot be met from it (too fast for what lies ahead), the temporal stage answers with
   // the closest start speed it can fly (TemporalProblem::relax_boundary; the paper's and certified
-  // rows without a jerk limit), and the plan says so.
+  // rows without a jerk limit), and the plan says so. A state at most 1% over the per-axis or norm
+  // limits (a vehicle tracking at its limits overshoots them a little) is scaled onto them first.
   Eigen::Vector3d start_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d start_acceleration = Eigen::Vector3d::Zero();
 
