@@ -2,6 +2,7 @@
 // exit codes with a one-line message on stderr.
 
 #include <iostream>
+#include <new>
 #include <stdexcept>
 
 #include "commands.h"
@@ -43,6 +44,10 @@ int main(int argc, char** argv) {
     return kExitInvalidInput;
   } catch (const std::invalid_argument& e) {
     std::cerr << "timeopt: invalid input: " << e.what() << "\n";
+    return kExitInvalidInput;
+  } catch (const std::bad_alloc&) {
+    // An input too large for this machine's memory (the library caps the sizes it knows of).
+    std::cerr << "timeopt: invalid input: out of memory: the input is too large\n";
     return kExitInvalidInput;
   } catch (const std::exception& e) {
     std::cerr << "timeopt: error: " << e.what() << "\n";

@@ -57,6 +57,7 @@ bool QuadrotorSimOptions::IsValid(std::string* error) const {
                 "1 / bandwidth)");
   }
   if (!(settle_time >= 0.0 && std::isfinite(settle_time))) return fail("settle_time must be >= 0 and finite");
+  if (!(max_position_error > 0.0)) return fail("max_position_error must be positive (or infinity)");
   if (max_jerk && !PositiveFinite(*max_jerk)) return fail("max_jerk must be positive and finite on every axis");
   if (!initial_position_error.allFinite() || !initial_velocity_error.allFinite() ||
       !initial_acceleration_error.allFinite()) {
@@ -265,6 +266,15 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   check_quadrotor(report.max_thrust_ratio, "max_thrust");
   check_quadrotor(report.min_thrust_ratio, "min_thrust");
   check_quadrotor(report.max_tilt_ratio, "max_tilt");
+  const bool tracked = report.max_position_error <= options_.max_position_error;
+  if (!tracked) {
+    std::ostringstream m;
+    m.precision(10);
+    m << (quadrotor_failed.empty() ? "" : "; ") << "the vehicle strays " << report.max_position_error
+      << " m from the reference at t = " << report.max_position_error_time << " s (max_position_error "
+      << options_.max_position_error << " m)";
+    quadrotor_failed += m.str();
+  }
   report.feasible = velocity_ok && acceleration_ok && quadrotor_failed.empty() && !diverged;
   std::ostringstream message;
   message.precision(10);

@@ -376,5 +376,22 @@ TEST(QuadrotorSim, QuadrotorLimitsMatchTheRecordedStates) {
   }
 }
 
+// A loop too slow to follow (bandwidth 1e-3 rad/s) stays within every limit while the vehicle
+// ends ~10 m behind the contract line's end: not feasible, saying how far it strayed (it used to
+// report feasible).
+TEST(QuadrotorSim, StrayingFromTheReferenceIsNotFeasible) {
+  const TemporalProblem p = ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json");
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_TRUE(r.is_success()) << r.message;
+  QuadrotorSimOptions slow;
+  slow.bandwidth = 1e-3;
+  const FeasibilityReport f = QuadrotorSim(slow).Fly(Trajectory(p.curve, r.profile), p.limits,
+                                                     Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  EXPECT_LE(f.max_velocity_ratio, 1.0);
+  EXPECT_GT(f.max_position_error, 9.0);
+  EXPECT_FALSE(f.feasible);
+  EXPECT_THAT(f.message, HasSubstr("strays"));
+}
+
 }  // namespace
 }  // namespace timeopt

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -138,6 +139,19 @@ TEST(ScaleInvariance, TheContractLineInAnyUnitTakesSevenSeconds) {
       }
     }
   }
+}
+
+// Sizes that drive memory are capped before any allocation: 1,000 pieces x 10,000 cells (1e7
+// cells, ~10 GB) is invalid input naming K and the cap.
+TEST(CurveValidation, TooManyCellsAreInvalidInput) {
+  std::vector<PolynomialPiece> pieces;
+  for (int i = 0; i < 1000; ++i) pieces.push_back(LinearPiece(Eigen::Vector3d(i, 0, 0), Eigen::Vector3d(i + 1, 0, 0)));
+  TemporalProblem p = LineProblem(10.0, 10000);
+  p.curve = PiecewiseCurve(pieces);
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  EXPECT_EQ(r.status, TemporalStatus::kInvalidInput);
+  EXPECT_THAT(r.message, HasSubstr("discretization.K"));
+  EXPECT_THAT(r.message, HasSubstr("2000000"));
 }
 
 }  // namespace

@@ -53,6 +53,9 @@ bool FromString(const std::string& text, ConstraintMode* mode);
 // The largest number of cells per piece a problem may ask for: 100000 (ds = 1e-5) is far finer
 // than any use needs, and keeps a problem's memory bounded per piece (a few MB).
 inline constexpr int kMaxCellsPerPiece = 100000;
+// The most cells in all (pieces x cells per piece): memory grows ~1 KB per cell in the solvers
+// (rows, cones, the KKT system), so this caps a problem at ~2 GB (the benchmarks go to 20,000).
+inline constexpr long long kMaxCells = 2000000;
 
 struct TemporalProblem {
   PiecewiseCurve curve;  // unit pieces, s in [0, 1] each
