@@ -161,6 +161,10 @@ TEST(Cbf, RejectsWhatItCannotReadNamingTheLine) {
   ExpectReadError(head + "OBJACOORD\n1\n0 1e400\n", "'1e400' is out of the range of a double");
   ExpectReadError("VER\n3\nVAR\n2000000000 1\nF 2000000000\n", "VAR size 2000000000 is out of range");
   ExpectReadError("VER\n3\nVAR\n-1 0\n", "VAR size -1 is out of range");
+  // Below the format's own limit but above the solver's cap (2e6): refused before any allocation, where
+  // a 62-byte file declaring 9e6 variables once grew the workspace to gigabytes.
+  ExpectReadError("VER\n3\nVAR\n9000000 1\nF 9000000\n", "VAR declares 9000000 variables, above the 2000000 supported");
+  ExpectReadError(head + "CON\n3000000 1\nL+ 3000000\n", "CON declares 3000000 rows, above the 2000000 supported");
 }
 
 TEST(Cbf, WriteRejectsAnInvalidProblem) {
