@@ -200,6 +200,7 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
   j["pieces"] = plan.curve.num_pieces();
   j["waypoints"] = static_cast<int>(plan.waypoints.cols());
   j["spatial_attempts"] = plan.spatial_attempts;
+  j["start_scale"] = plan.start_scale;
   j["spatial_iterations"] = static_cast<int>(plan.spatial.iterations.size());
   j["max_velocity_ratio"] = value_if(ok, plan.temporal.max_velocity_ratio);
   j["max_acceleration_ratio"] = value_if(ok, plan.temporal.max_acceleration_ratio);

@@ -124,6 +124,12 @@ bool PlannerOptions::IsValid(std::string* error) const {
 
 namespace {
 
+// Bisection on the scale of a start state that cannot be flown (jerk-limited mode): a vehicle
+// tracking at its limits is usually a few percent over what a new curve allows, so the first try
+// is 0.9; 0.01 is within the flight criterion's 1% on speed. At most ~7 temporal solves.
+constexpr double kStartScaleFirstGuess = 0.9;
+constexpr double kStartScaleTolerance = 0.01;
+
 // Samples of a piece at chord steps of at most `step` (polygon length at 16 samples, +25%).
 void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* points) {
   double length = 0.0;
@@ -261,13 +267,15 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
       onto_limits(options.start_velocity, options.limits.max_velocity, options.limits.max_speed);
   const Eigen::Vector3d start_acceleration = onto_limits(
       options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
-  if (moving) {
-    const double first = path.waypoints.cols() > 1 ? (path.waypoints.col(1) - path.waypoints.col(0)).norm() : 1.0;
+  // tau: the first piece (after splitting) at the start speed, so that f' matches the piece's chord.
+  const auto hold_start = [&](const Waypoints& joints, SpatialOptimizerOptions* attempt_options) {
+    if (!moving) return;
+    const double first = joints.cols() > 1 ? (joints.col(1) - joints.col(0)).norm() : 1.0;
     const double speed = start_velocity.norm() > 0.0 ? start_velocity.norm() : options.limits.max_velocity.minCoeff();
     const double tau = spatial.formulation == SpatialFormulation::kTimeCoupled ? 1.0 : std::max(first, 1e-3) / speed;
-    spatial.start_tangent = start_velocity * tau;
-    spatial.start_curvature = start_acceleration * tau * tau;
-  }
+    attempt_options->start_tangent = start_velocity * tau;
+    attempt_options->start_curvature = start_acceleration * tau * tau;
+  };
   // Exact against the voxels where the field is below radius + check margin; between samples the
   // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
   // less than radius + half a step lowers the requirement to its own clearance (never below the
@@ -285,6 +293,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     attempt_options.collision_weight = spatial.collision_weight * factor;
     const Waypoints joints =
         SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
+    hold_start(joints, &attempt_options);
     t = Clock::now();
     result.spatial = OptimizeSpatialCurve(*esdf_, joints, attempt_options);
     result.times.spatial_ms += MillisecondsSince(t);
@@ -337,6 +346,61 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     temporal_options_ = options.socp;
   }
   result.temporal = temporal_->Solve(problem);
+  const bool start_failed = result.temporal.status == TemporalStatus::kInfeasible ||
+                            result.temporal.status == TemporalStatus::kNumericalError;
+  if (start_failed && moving && problem.limits.max_jerk) {
+    // The jerk-limited mode has no boundary relaxation in the temporal stage: the planner scales
+    // the start state toward rest, the speed by lambda and the acceleration across the path by
+    // lambda^2 (what the same curve gives at that speed), to the largest feasible lambda by
+    // bisection. A braking start keeps its braking (lowering it would only lengthen the stop);
+    // if no lambda is feasible that way, the whole acceleration is scaled by lambda^2 (at lambda
+    // 0, rest, which any curve allows). A numerical error is taken the same way: a start exactly
+    // at a limit (a vehicle that tracked onto it) leaves the interior-point method no interior
+    // at the first grid point.
+    const double speed = start_velocity.norm();
+    const Eigen::Vector3d along = speed > 0.0 ? Eigen::Vector3d(start_velocity / speed) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d tangential = along * along.dot(start_acceleration);
+    const bool braking = along.dot(start_acceleration) < 0.0;
+    const auto search = [&](bool keep_braking, double* scale) {
+      double feasible = 0.0, infeasible = 1.0;
+      std::optional<TemporalResult> best;
+      for (double lambda = kStartScaleFirstGuess; infeasible - feasible > kStartScaleTolerance;
+           lambda = 0.5 * (feasible + infeasible)) {
+        TemporalProblem scaled = problem;
+        scaled.boundary.start_velocity = lambda * start_velocity;
+        scaled.boundary.start_acceleration =
+            keep_braking ? Eigen::Vector3d(lambda * lambda * (start_acceleration - tangential) + tangential)
+                         : Eigen::Vector3d(lambda * lambda * start_acceleration);
+        TemporalResult attempt = temporal_->Solve(scaled);
+        if (attempt.status == TemporalStatus::kOptimal) {
+          feasible = lambda;
+          best = std::move(attempt);
+        } else if (attempt.status == TemporalStatus::kInfeasible ||
+                   attempt.status == TemporalStatus::kNumericalError) {
+          infeasible = lambda;
+        } else {
+          break;
+        }
+      }
+      *scale = feasible;
+      return best;
+    };
+    double scale = 0.0;
+    bool kept = braking;
+    std::optional<TemporalResult> best;
+    if (braking) best = search(true, &scale);
+    if (!best) {
+      kept = false;
+      best = search(false, &scale);
+    }
+    if (best) {
+      best->message = "start speed scaled by " + std::to_string(scale) +
+                      (kept ? ", braking kept" : ", acceleration by its square") +
+                      ": the given state cannot be flown within the jerk limit";
+      result.start_scale = scale;
+      result.temporal = std::move(*best);
+    }
+  }
   result.times.temporal_ms = MillisecondsSince(t);
   switch (result.temporal.status) {
     case TemporalStatus::kOptimal:

@@ -141,5 +141,82 @@ TEST(Planner, AStartInMotionIsFlownFromThatState) {
   EXPECT_TRUE(report.feasible) << report.message;
 }
 
+// The closed re-planning loop of a vehicle in flight: plan, fly 0.5 s in the jerk-input simulator,
+// re-plan from the simulated state (position, velocity, acceleration), and so on; within 2 m of the
+// goal the rest is flown as planned, as receding-horizon planners do (e.g. Fast-Planner's no-replan
+// threshold): the vehicle is then braking, and its state lags the reference by ~1/bandwidth, so a
+// stop from the simulated state would need more than the limits. Every flown segment must keep the
+// limits within 1% (the flight criterion) and the loop must end at the goal.
+struct LoopOutcome {
+  int plans = 0;
+  int moving_starts = 0;   // plans from a state in motion
+  int scaled_starts = 0;   // plans whose start state the planner had to scale (start_scale < 1)
+  bool reached = false;
+};
+
+LoopOutcome FlyReplanningLoop(const ForestFixture& forest, int seed) {
+  constexpr double kCycle = 0.5;             // s flown before each re-plan
+  constexpr double kNoReplanDistance = 2.0;  // m
+  Planner planner(*forest.esdf);
+  std::mt19937 rng(seed);
+  Eigen::Vector3d position = FreePoint(*forest.esdf, &rng, 1.0, 1.0, 2.0);
+  const Eigen::Vector3d goal = FreePoint(*forest.esdf, &rng, 1.0, 8.0, 9.0);
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero(), acceleration = Eigen::Vector3d::Zero();
+  PlannerOptions options;  // certified rows, jerk 10 m/s^3
+  QuadrotorSimOptions flight;
+  flight.limit_tolerance = 0.01;
+  flight.record_states = true;
+  LoopOutcome outcome;
+  for (; outcome.plans < 40 && !outcome.reached;) {
+    options.start_velocity = velocity;
+    options.start_acceleration = acceleration;
+    const PlanResult plan = planner.Plan(position, goal, options);
+    ++outcome.plans;
+    if (velocity.norm() > 0.1) ++outcome.moving_starts;
+    if (plan.start_scale < 1.0) ++outcome.scaled_starts;
+    EXPECT_TRUE(plan.is_success()) << "plan " << outcome.plans << ": " << plan.message;
+    if (!plan.is_success()) return outcome;
+    const Trajectory trajectory(plan.curve, plan.temporal.profile);
+    const FeasibilityReport report = QuadrotorSim(flight).Fly(trajectory, options.limits, velocity, acceleration);
+    const bool last = trajectory.duration() <= kCycle ||
+                      (trajectory.Evaluate(kCycle).position - goal).norm() < kNoReplanDistance;
+    const double horizon = last ? trajectory.duration() : kCycle;
+    double worst_velocity = 0.0, worst_acceleration = 0.0;
+    SimState at_horizon = report.states.front();
+    for (const SimState& state : report.states) {
+      if (!last && state.t > horizon + 1e-9) break;
+      worst_velocity = std::max(
+          worst_velocity, (state.velocity.cwiseAbs().array() / options.limits.max_velocity.array()).maxCoeff());
+      worst_acceleration = std::max(
+          worst_acceleration,
+          (state.acceleration.cwiseAbs().array() / options.limits.max_acceleration.array()).maxCoeff());
+      at_horizon = state;
+    }
+    EXPECT_LE(worst_velocity, 1.01) << "plan " << outcome.plans;
+    EXPECT_LE(worst_acceleration, 1.01) << "plan " << outcome.plans;
+    if (last) {
+      EXPECT_TRUE(report.feasible) << "plan " << outcome.plans << ": " << report.message;
+      EXPECT_LT((report.states.back().position - goal).norm(), 0.05);
+      outcome.reached = true;
+    }
+    position = at_horizon.position;
+    velocity = at_horizon.velocity;
+    acceleration = at_horizon.acceleration;
+  }
+  return outcome;
+}
+
+TEST(Planner, TheReplanningLoopFromSimulatedStatesReachesTheGoalWithinTheLimits) {
+  const ForestFixture forest(5, 0.08);
+  for (const int seed : {11, 12, 13, 14}) {
+    SCOPED_TRACE(seed);
+    const LoopOutcome outcome = FlyReplanningLoop(forest, seed);
+    EXPECT_TRUE(outcome.reached) << "not at the goal after " << outcome.plans << " plans";
+    // Several cycles, nearly all from a state in motion (the first is from rest).
+    EXPECT_GE(outcome.plans, 5);
+    EXPECT_GE(outcome.moving_starts, outcome.plans - 2);
+  }
+}
+
 }  // namespace
 }  // namespace timeopt

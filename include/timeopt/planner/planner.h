@@ -156,6 +156,10 @@ struct PlanResult {
   // Smallest clearance on the dense check, metres: the exact distance to occupied voxel cubes
   // near obstacles, the ESDF elsewhere.
   double min_clearance = 0.0;
+  // A start in motion that no jerk-limited profile can leave within the limits: the largest
+  // lambda (within 0.01) for which the start velocity times lambda and the start acceleration times
+  // lambda^2 can be flown; the trajectory starts from that state. 1: the given state.
+  double start_scale = 1.0;
   PlanStageTimes times;
   bool is_success() const { return status == PlanStatus::kSuccess; }
 };
