@@ -11,6 +11,10 @@ namespace {
 // OctoMap keys are 16 bit with the origin at 32768, so world voxel indices span this range.
 constexpr int kMinIndex = -32768;
 constexpr int kMaxIndex = 32767;
+// Largest dense grid: 1 byte of occupancy and 4 of distance per voxel, so 2e8 voxels are ~1 GB
+// (plus the transform's per-plane scratch). The shared geb079 map is 3.6e6; a 40-byte .bt whose
+// root is a leaf spans 2.8e14 and used to end as a bare bad_alloc.
+constexpr int64_t kMaxGridVoxels = 200'000'000;
 
 }  // namespace
 
@@ -60,6 +64,14 @@ OccupancyGrid::OccupancyGrid(double resolution_in, const VoxelBox& box_in, bool 
     throw std::invalid_argument("grid resolution must be positive and finite");
   }
   if (box.empty()) throw std::invalid_argument("grid box is empty (a size is not positive)");
+  if (box.num_voxels() > kMaxGridVoxels) {
+    std::ostringstream message;
+    message << "grid of " << box.size.x() << " x " << box.size.y() << " x " << box.size.z() << " = "
+            << box.num_voxels() << " voxels is above the " << kMaxGridVoxels
+            << " supported (~5 bytes each with its distance field); use a smaller region or a coarser "
+               "resolution";
+    throw std::invalid_argument(message.str());
+  }
   occupied.assign(static_cast<size_t>(box.num_voxels()), value ? 1 : 0);
 }
 

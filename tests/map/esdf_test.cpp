@@ -278,6 +278,16 @@ TEST(EsdfTest, InvalidGridsThrowClearErrors) {
   zero.size.z() = 0;
   EXPECT_THROW(OccupancyGrid(0.1, zero), std::invalid_argument);
   EXPECT_THROW(OccupancyGrid(0.0, box), std::invalid_argument);
+  // Above the 2e8-voxel cap: refused by its size before any allocation (2^30 bytes here).
+  VoxelBox huge = box;
+  huge.size = Eigen::Vector3i(1024, 1024, 1024);
+  try {
+    const OccupancyGrid grid(0.1, huge);
+    ADD_FAILURE() << "a 2^30-voxel grid was allocated";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("1073741824 voxels is above the 200000000 supported"), std::string::npos)
+        << e.what();
+  }
   const OccupancyGrid some(0.1, box, false);
   OccupancyGrid one = some;
   one.Set(Eigen::Vector3i(1, 1, 1), true);

@@ -92,6 +92,14 @@ TEST_F(MapCommandTest, InvalidInputExitsWithTwoAndOneLine) {
     // One line: a single trailing newline.
     EXPECT_EQ(std::count(run.output.begin(), run.output.end(), '\n'), 1) << run.output;
   }
+  // A 40-byte map whose root is a leaf spans the whole key range (2.8e14 voxels): its slice is
+  // refused by the grid's size cap, naming it, not by running out of memory.
+  const std::string leaf = Path("leaf_root.bt");
+  std::ofstream(leaf, std::ios::binary) << "# Octomap OcTree binary file\nid OcTree\nsize 1\nres 0.1\ndata\n"
+                                        << std::string(2, '\0');
+  const CliRun leaf_slice = RunCli("map slice " + leaf + " --z 0 -o " + Path("leaf.png"));
+  EXPECT_EQ(leaf_slice.exit_code, 2) << leaf_slice.output;
+  EXPECT_THAT(leaf_slice.output, HasSubstr("voxels is above the 200000000 supported"));
   // A slice height outside the map.
   ASSERT_EQ(RunCli("map generate sharp-turn -o " + Path("t.bt")).exit_code, 0);
   const CliRun high = RunCli("map slice " + Path("t.bt") + " --z 50 -o " + Path("t.png"));

@@ -44,7 +44,8 @@ struct OccupancyGrid {
   std::vector<uint8_t> occupied;  // box.num_voxels() values, row-major, x fastest
 
   // A grid of `box` at `resolution` with every voxel set to `value`. Throws
-  // std::invalid_argument for an empty box or a non-positive resolution.
+  // std::invalid_argument for an empty box, a non-positive resolution, or a box of more than 2e8
+  // voxels (~1 GB with its distance field), before allocating.
   OccupancyGrid(double resolution, const VoxelBox& box, bool value = false);
   OccupancyGrid() = default;
 
