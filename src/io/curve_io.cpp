@@ -13,6 +13,14 @@ namespace timeopt {
 namespace internal {
 
 nlohmann::json ParseJsonText(const std::string& text, const std::string& context) {
+  // The parsed tree takes ~16 bytes of memory per byte of text (a 130 MB problem reached 2.1 GB),
+  // and a parse that runs out of memory cannot be unwound (the library's tree destructor allocates,
+  // so the process aborts). The largest problem the cell cap admits, 2e6 cells at K = 50 (4e4
+  // quintic pieces), is ~15 MB of text.
+  if (text.size() > kMaxJsonBytes) {
+    throw std::invalid_argument(context + ": " + std::to_string(text.size()) + " bytes of JSON, above the " +
+                                std::to_string(kMaxJsonBytes) + " supported");
+  }
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {

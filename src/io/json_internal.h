@@ -19,7 +19,11 @@
 
 namespace timeopt::internal {
 
-// Parses JSON text; throws std::invalid_argument "<context>: malformed JSON: ..." on syntax errors.
+// Largest JSON text read (64 MiB): parsing it takes ~1 GB.
+inline constexpr size_t kMaxJsonBytes = size_t{64} << 20;
+
+// Parses JSON text; throws std::invalid_argument "<context>: malformed JSON: ..." on syntax errors,
+// and "<context>: N bytes of JSON, above the ..." for text above kMaxJsonBytes.
 nlohmann::json ParseJsonText(const std::string& text, const std::string& context);
 
 // The curve object of the contract; errors name "<context>.pieces[i].x" and so on.

@@ -60,6 +60,11 @@ TEST(CurveJson, ShorterAxesArePaddedWithZeros) {
 
 TEST(CurveJson, BadInputNamesTheField) {
   EXPECT_THAT(ErrorOf("{\"pieces\": [ {\"x\": [1"), HasSubstr("malformed JSON"));
+  // Text above 64 MiB is refused before parsing (its tree would take ~1 GB, and a parse that runs
+  // out of memory aborts the process); one byte below the cap is parsed (here: an empty object).
+  EXPECT_THAT(ErrorOf(std::string((size_t{64} << 20) - 2, ' ') + "{}}"),
+              HasSubstr("67108865 bytes of JSON, above the 67108864 supported"));
+  EXPECT_THAT(ErrorOf(std::string((size_t{64} << 20) - 2, ' ') + "{}"), HasSubstr("curve.pieces: missing"));
   EXPECT_THAT(ErrorOf(R"({"pieces": []})"), HasSubstr("curve.pieces: expected at least 1 piece"));
   EXPECT_THAT(ErrorOf(R"({"peaces": []})"), HasSubstr("curve.pieces: missing"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1, 2], "y": [], "z": [0, 0]}]})"),
