@@ -3,6 +3,7 @@
 #
 #   scripts/install_deps.sh          everything: the library, the CLI, tests, benchmarks, experiments
 #   scripts/install_deps.sh main     only what the library and the `timeopt` CLI need (the main job)
+#   scripts/install_deps.sh fuzz     the library's needs plus Clang and its libFuzzer runtime (scripts/fuzz.sh)
 #
 # Idempotent: when everything is present it only runs dpkg-query and exits. Each package is listed
 # with what uses it, so that a new find_package/pkg_check_modules or script tool gets its line here
@@ -11,8 +12,8 @@ set -euo pipefail
 
 group="${1:-all}"
 case "$group" in
-  main | all) ;;
-  *) echo "install_deps: unknown group '$group' (expected 'main' or 'all')" >&2; exit 2 ;;
+  main | all | fuzz) ;;
+  *) echo "install_deps: unknown group '$group' (expected 'main', 'all' or 'fuzz')" >&2; exit 2 ;;
 esac
 
 # The library and the CLI (CMakeLists.txt, top part).
@@ -35,8 +36,15 @@ TEST_PACKAGES=(
   python3-cvxopt python3-numpy      # tests/temporal/cvxopt_cross_check.py (second solver)
 )
 
+# Fuzzing (scripts/fuzz.sh, TIMEOPT_BUILD_FUZZERS).
+FUZZ_PACKAGES=(
+  clang-14                          # the compiler libFuzzer comes with
+  libclang-rt-14-dev                # libclang_rt.fuzzer and the sanitizer runtimes
+)
+
 PACKAGES=("${MAIN_PACKAGES[@]}")
 if [[ "$group" == all ]]; then PACKAGES+=("${TEST_PACKAGES[@]}"); fi
+if [[ "$group" == fuzz ]]; then PACKAGES+=("${FUZZ_PACKAGES[@]}"); fi
 
 missing=()
 for pkg in "${PACKAGES[@]}"; do
