@@ -1,6 +1,7 @@
 // `timeopt map info|generate|slice` through the real executable, and the committed default maps.
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -31,8 +32,13 @@ class MapCommandTest : public ::testing::Test {
     if (!std::filesystem::exists(TIMEOPT_CLI_PATH)) {
       GTEST_SKIP() << "skipped: the timeopt executable is not built (" << TIMEOPT_CLI_PATH << ")";
     }
-    dir_ = std::filesystem::path(::testing::TempDir()) / "map_command_test";
+    // One folder per process: ctest runs each test in its own process, two at a time under -j2.
+    dir_ = std::filesystem::path(::testing::TempDir()) / ("map_command_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
   }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::filesystem::path dir_;

@@ -2,6 +2,7 @@
 // summary agree (run on a small generated map written to a temporary directory).
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -42,7 +43,10 @@ PlanRun RunPlan(const std::string& args, const std::string& dir) {
 class PlanCommand : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = (std::filesystem::temp_directory_path() / "timeopt_plan_command_test").string();
+    // One folder per process: ctest runs each test in its own process, two at a time under -j2.
+    dir_ = (std::filesystem::temp_directory_path() /
+            ("timeopt_plan_command_test_" + std::to_string(::getpid())))
+               .string();
     std::filesystem::create_directories(dir_);
     ForestOptions forest;
     forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(8, 8, 3));
