@@ -156,6 +156,10 @@ void WriteCurveJson(const PiecewiseCurve& curve, const std::string& path) {
   WriteTextFile(path, CurveToJson(curve));
 }
 
+// Largest number of waypoints read: 1e6 (a curve through them takes a few hundred MB; a temporal
+// problem on it meets the 2e6-cell cap first at K >= 2).
+constexpr size_t kMaxWaypoints = 1'000'000;
+
 Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& source) {
   std::istringstream in(csv_text);
   std::string line;
@@ -177,6 +181,10 @@ Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& sour
     if (values.size() != 3) {
       throw std::invalid_argument(where + ": expected 3 values x,y,z, got " +
                                   std::to_string(values.size()));
+    }
+    if (points.size() >= kMaxWaypoints) {
+      throw std::invalid_argument(where + ": more than " + std::to_string(kMaxWaypoints) +
+                                  " waypoints, above the supported number");
     }
     points.emplace_back(values[0], values[1], values[2]);
   }

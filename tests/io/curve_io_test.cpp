@@ -108,6 +108,16 @@ TEST(WaypointsCsv, BadRowsNameTheLine) {
     EXPECT_THAT(e.what(), HasSubstr("w.csv line 2: 'abc' is not a number"));
   }
   EXPECT_THROW(ParseWaypointsCsv("0,0,0\n1,2,nan\n"), std::invalid_argument);
+  // The cap: 1e6 waypoints are read, one more is refused naming its line.
+  std::string rows;
+  for (int i = 0; i < 1'000'000; ++i) rows += "0,0,0\n";
+  EXPECT_EQ(ParseWaypointsCsv(rows, "w.csv").cols(), 1'000'000);
+  try {
+    ParseWaypointsCsv(rows + "1,1,1\n", "w.csv");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("w.csv line 1000001: more than 1000000 waypoints"));
+  }
   EXPECT_THROW(ParseWaypointsCsv("0,0,0\n"), std::invalid_argument);
 }
 

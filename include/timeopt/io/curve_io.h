@@ -41,6 +41,8 @@ CurveFile ReadCurveJson(const std::string& path);
 std::string CurveToJson(const PiecewiseCurve& curve, int indent = 2);
 void WriteCurveJson(const PiecewiseCurve& curve, const std::string& path);
 
+// Rows x,y,z (an optional "x,y,z" header, '#' comments and blank lines skipped); at least 2 and at
+// most 1e6 waypoints. Throws std::invalid_argument naming `source` and the line.
 Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& source = "waypoints");
 Waypoints ReadWaypointsCsv(const std::string& path);
 
