@@ -27,6 +27,8 @@
 #include "timeopt/trajectory/trajectory.h"
 #include "timeopt/viz/plot.h"
 
+#include "sharp_turn.h"
+
 namespace {
 
 using namespace timeopt;
@@ -42,14 +44,7 @@ Waypoints FigureEight() {
   return w;
 }
 
-// The paper's motivating example (Sect. I), as in experiment_temporal_figures.
-Waypoints SharpTurn() {
-  Waypoints w(3, 7);
-  w << 0, 4, 8, 9.5, 8, 4, 0,
-       0, 0, 0, 0.8, 1.6, 1.6, 1.6,
-       1, 1, 1, 1, 1, 1, 1;
-  return w;
-}
+using experiments::SharpTurn;
 
 struct Lap {
   std::string course;

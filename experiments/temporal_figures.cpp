@@ -23,18 +23,13 @@
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 
+#include "sharp_turn.h"
+
 namespace {
 
 using namespace timeopt;
 
-// The paper's motivating example (Sect. I): a fast straight run into a near-reverse sharp turn.
-Waypoints SharpTurn() {
-  Waypoints w(3, 7);
-  w << 0, 4, 8, 9.5, 8, 4, 0,
-       0, 0, 0, 0.8, 1.6, 1.6, 1.6,
-       1, 1, 1, 1, 1, 1, 1;
-  return w;
-}
+using experiments::SharpTurn;
 
 Waypoints RandomWalk(int count, unsigned seed) {
   std::mt19937 rng(seed);
