@@ -126,7 +126,7 @@ namespace {
 
 // Bisection on the scale of a start state that cannot be flown (jerk-limited mode): a vehicle
 // tracking at its limits is usually a few percent over what a new curve allows, so the first try
-// is 0.9; 0.01 is within the flight criterion's 1% on speed. At most ~7 temporal solves.
+// is 0.9; 0.01 is within the flight criterion's 1% on speed. About 7 temporal solves per search.
 constexpr double kStartScaleFirstGuess = 0.9;
 constexpr double kStartScaleTolerance = 0.01;
 
