@@ -39,12 +39,19 @@ constexpr const char* kDefaultStart = "1,1,1.5";
 constexpr const char* kDefaultGoal = "19,19,1.5";
 constexpr const char* kDefaultOutput = "results/plan.csv";
 constexpr const char* kDefaultPlot = "results/plan.png";
+// The distance field covers the box of start and goal grown by this much (metres, every axis):
+// room for the detours of a forest or a building floor, while a city-sized map costs only the
+// region. A path that needs more finds a wall there (the region's cut faces count as occupied) and
+// the plan fails as blocked; --whole-map lifts it.
+constexpr double kDefaultRegionMargin = 10.0;
 
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
   std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
+  double region_margin = kDefaultRegionMargin;  // metres around start and goal; see --region-margin
+  bool whole_map = false;
   QuadrotorLimitArgs quadrotor;  // in addition to the per-axis limits the planner needs
 };
 
@@ -102,7 +109,10 @@ int RunPlan(PlanArgs args) {
   }
   const OccupancyMap map = OccupancyMap::Load(args.map, unknown);
   auto t = Clock::now();
-  const Esdf esdf = Esdf::FromMap(map);
+  Eigen::AlignedBox3d region(start.cwiseMin(goal), start.cwiseMax(goal));
+  region.min().array() -= args.region_margin;
+  region.max().array() += args.region_margin;
+  const Esdf esdf = args.whole_map ? Esdf::FromMap(map) : Esdf::FromMapRegion(map, region);
   const double esdf_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
   Planner planner(esdf);
   const PlanResult plan = planner.Plan(start, goal, options);
@@ -131,6 +141,10 @@ int RunPlan(PlanArgs args) {
   norm_limit("max_tilt", options.limits.max_tilt);
   for (const auto& item : result.items()) summary[item.key()] = item.value();
   summary["time_ms"]["esdf"] = esdf_ms;
+  const Eigen::AlignedBox3d field_box = esdf.box().Metric(esdf.resolution());
+  summary["esdf_box"] = {{"min", {field_box.min().x(), field_box.min().y(), field_box.min().z()}},
+                         {"max", {field_box.max().x(), field_box.max().y(), field_box.max().z()}},
+                         {"voxels", esdf.box().num_voxels()}};
   const bool ok = plan.is_success();
   if (ok) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
@@ -216,6 +230,12 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
                   "Unobserved voxels inside the map's box: free (optimistic) or occupied")
       ->check(CLI::IsMember(EnumNames(kUnknownSpaces)))
       ->capture_default_str();
+  sub->add_option("--region-margin", args->region_margin,
+                  "The distance field covers the box of start and goal grown by this much, metres "
+                  "(clipped to the map; its cut faces count as occupied)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_flag("--whole-map", args->whole_map, "The distance field covers the whole map (no region of interest)");
   sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");

@@ -270,6 +270,42 @@ Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBo
   return Esdf(map.Rasterize(voxels));
 }
 
+Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region) {
+  if (map.empty()) throw std::invalid_argument("the map is empty (no known voxel)");
+  const VoxelBox known = map.KnownBox();
+  const VoxelBox wanted = VoxelBox::Covering(region, map.resolution());
+  VoxelBox box;
+  box.min = wanted.min.cwiseMax(known.min);
+  box.size = wanted.end().cwiseMin(known.end()) - box.min;
+  if ((box.size.array() <= 0).any()) {
+    std::ostringstream message;
+    message << "the region [" << region.min().transpose() << "] - [" << region.max().transpose()
+            << "] m does not overlap the map's known box " << "[" << known.Metric(map.resolution()).min().transpose()
+            << "] - [" << known.Metric(map.resolution()).max().transpose() << "] m";
+    throw std::invalid_argument(message.str());
+  }
+  OccupancyGrid grid = map.Rasterize(box);
+  // The cut faces: a face of the region strictly inside the known box.
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side < 2; ++side) {
+      const bool cut = side == 0 ? box.min(axis) > known.min(axis) : box.end()(axis) < known.end()(axis);
+      if (!cut) continue;
+      const int layer = side == 0 ? box.min(axis) : box.end()(axis) - 1;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Eigen::Vector3i index;
+      index(axis) = layer;
+      for (int i = box.min(u); i < box.end()(u); ++i) {
+        for (int j = box.min(v); j < box.end()(v); ++j) {
+          index(u) = i;
+          index(v) = j;
+          grid.Set(index, true);
+        }
+      }
+    }
+  }
+  return Esdf(grid);
+}
+
 template <bool kWithGradient>
 inline double Esdf::Evaluate(const Eigen::Vector3d& point, Eigen::Vector3d* gradient) const {
   // Clamp to the interpolation domain; the part outside adds its length (see the header).

@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <vector>
 
+#include "timeopt/map/occupancy_map.h"
 #include "timeopt/map/voxel_grid.h"
 
 #include "../common/map_fixtures.h"
@@ -296,6 +298,56 @@ TEST(EsdfTest, InvalidGridsThrowClearErrors) {
   Eigen::VectorXd d;
   EXPECT_THROW(esdf.Distances(Eigen::Matrix3Xd(3, 2), nullptr, nullptr), std::invalid_argument);
   EXPECT_THROW(esdf.DistanceAndGradient(Eigen::Vector3d::Zero(), nullptr), std::invalid_argument);
+}
+
+// The field of a region of interest against the whole map's field (itself checked against brute
+// force above). Walls on the cut faces make the region's field a lower bound everywhere, and equal
+// wherever the whole map's nearest obstacle is closer than the nearest cut layer (it then lies
+// inside the region): both facts follow from the definition, so they are asserted exactly, up to
+// float storage. On a forest with cuts on four faces and none in z.
+TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
+  const test_support::ForestFixture forest(4, 0.15);
+  const Esdf whole = Esdf::FromMap(forest.map);
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(2.0, 1.0, -5.0), Eigen::Vector3d(8.0, 9.0, 5.0));
+  const Esdf part = Esdf::FromMapRegion(forest.map, region);
+  const VoxelBox box = part.box();
+  ASSERT_EQ(box.min, Eigen::Vector3i(20, 10, 0));        // clipped to the map in z
+  ASSERT_EQ(box.size, Eigen::Vector3i(60, 80, 30));
+  const double r = part.resolution();
+  int equal = 0, checked = 0;
+  for (int z = box.min.z(); z < box.end().z(); ++z) {
+    for (int y = box.min.y(); y < box.end().y(); ++y) {
+      for (int x = box.min.x(); x < box.end().x(); ++x) {
+        const Eigen::Vector3i v(x, y, z);
+        const double d_part = part.VoxelDistance(v), d_whole = whole.VoxelDistance(v);
+        ++checked;
+        ASSERT_LE(d_part, d_whole + kFloatStorageTolerance) << v.transpose();
+        // Centre distance to the nearest cut layer (x and y faces are cut, z is not).
+        const double to_cut = r * std::min({x - box.min.x(), box.end().x() - 1 - x, y - box.min.y(),
+                                            box.end().y() - 1 - y});
+        if (d_whole > 0.0 && d_whole + 0.5 * r < to_cut) {
+          ASSERT_NEAR(d_part, d_whole, kFloatStorageTolerance) << v.transpose();
+          ++equal;
+        }
+      }
+    }
+  }
+  // The equality is checked on a large part of the region (44% of its voxels here).
+  EXPECT_GT(equal, checked / 3);
+  // A region that misses the map, and one of zero size, are refused.
+  EXPECT_THROW(Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(20, 20, 0),
+                                                                   Eigen::Vector3d(30, 30, 3))),
+               std::invalid_argument);
+  EXPECT_THROW(Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(2, 2, 1),
+                                                                   Eigen::Vector3d(2, 8, 2))),
+               std::invalid_argument);
+  // A region holding the whole map has no cut: the same field as FromMap.
+  const Esdf all = Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-50),
+                                                                       Eigen::Vector3d::Constant(50)));
+  ASSERT_EQ(all.box().size, whole.box().size);
+  for (const Eigen::Vector3i& v : {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(99, 99, 29)}) {
+    EXPECT_EQ(all.VoxelDistance(v), whole.VoxelDistance(v));
+  }
 }
 
 TEST(VoxelBoxTest, CoveringSnapsOutwardsAndRejectsZeroSize) {

@@ -132,6 +132,28 @@ TEST_F(PlanCommand, BadInputExitsWithTwoAndAOneLineMessage) {
   }
 }
 
+// The distance field over a region of interest (the start-goal box grown by --region-margin): a
+// short plan in one corner of the map gives the same trajectory as the whole-map field, since
+// nothing near its path differs (the region's field equals the map's away from its cuts; see
+// EsdfTest.RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts), over a fraction of the voxels.
+TEST_F(PlanCommand, ARegionOfInterestPlansAsTheWholeMapOverFewerVoxels) {
+  const std::string route = "--map " + map() + " --start 0.6,0.6,1.5 --goal 2.5,1.2,1.5";
+  const PlanRun region = RunPlan(route + " --region-margin 1.5", dir_);
+  const PlanRun whole = RunPlan(route + " --whole-map", dir_);
+  ASSERT_EQ(region.exit_code, 0) << region.out << region.err;
+  ASSERT_EQ(whole.exit_code, 0) << whole.out << whole.err;
+  const nlohmann::json r = nlohmann::json::parse(region.out), w = nlohmann::json::parse(whole.out);
+  EXPECT_EQ(r["total_time"].get<double>(), w["total_time"].get<double>());
+  EXPECT_EQ(r["path_length"].get<double>(), w["path_length"].get<double>());
+  // Region: x in [0, 4], y in [0, 2.7], z in [0, 3] (clipped to the map) against 8 x 8 x 3 m.
+  EXPECT_EQ(r["esdf_box"]["voxels"].get<int64_t>(), 40 * 27 * 30);
+  EXPECT_EQ(w["esdf_box"]["voxels"].get<int64_t>(), 80 * 80 * 30);
+  // The margin must be positive.
+  const PlanRun zero = RunPlan(route + " --region-margin 0", dir_);
+  EXPECT_EQ(zero.exit_code, 2);
+  EXPECT_NE(zero.err.find("--region-margin"), std::string::npos) << zero.err;
+}
+
 TEST_F(PlanCommand, EnclosedGoalIsUnreachableWithExitThree) {
   const PlanRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 6,6,1.5", dir_);
   EXPECT_EQ(run.exit_code, 3) << run.out << run.err;

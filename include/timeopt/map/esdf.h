@@ -93,6 +93,16 @@ class Esdf final : public DistanceField {
   static Esdf FromMap(const OccupancyMap& map,
                       const std::optional<Eigen::AlignedBox3d>& box = std::nullopt);
 
+  // The field over a region of interest of a large map: `region` (metres, snapped outwards to the
+  // lattice) clipped to the map's known box. Where the region cuts the map, its outermost voxel
+  // layer counts as occupied, so the field never exceeds the full map's field (obstacles beyond a
+  // cut are at least as far as the cut) and equals it wherever the nearest obstacle is closer than
+  // the cut; a planner that keeps its clearance in this field keeps it in the whole map. Memory
+  // and time scale with the region, not the map. Throws std::invalid_argument for an empty map,
+  // a region that does not overlap the known box or has zero size, and the cases of the grid
+  // constructor.
+  static Esdf FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region);
+
   double Distance(const Eigen::Vector3d& point) const override;
   double DistanceAndGradient(const Eigen::Vector3d& point,
                              Eigen::Vector3d* gradient) const override;
