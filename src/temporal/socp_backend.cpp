@@ -193,6 +193,7 @@ class SocpTemporalSolver final : public TemporalSolver {
   TemporalBackend backend() const override { return TemporalBackend::kSocp; }
 
  protected:
+  double jerk_ipopt_fallback_seconds() const override { return options_.jerk_ipopt_fallback_seconds; }
   void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
                         std::vector<double>* x) override {
     // The structured path first (banded_ipm.h) where it applies; the conic solver decides whenever

@@ -60,11 +60,23 @@ bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations
 }  // namespace
 
 bool SocpTemporalOptions::IsValid(std::string* error) const {
-  return ValidSolverOptions(tolerance, max_iterations, 1, error);
+  if (!ValidSolverOptions(tolerance, max_iterations, 1, error)) return false;
+  if (!(jerk_ipopt_fallback_seconds >= 0.0)) {
+    if (error) {
+      *error = "jerk_ipopt_fallback_seconds: expected a number >= 0, got " + std::to_string(jerk_ipopt_fallback_seconds);
+    }
+    return false;
+  }
+  return true;
 }
 
 bool IpoptTemporalOptions::IsValid(std::string* error) const {
-  return ValidSolverOptions(tolerance, max_iterations, 0, error);
+  if (!ValidSolverOptions(tolerance, max_iterations, 0, error)) return false;
+  if (!(max_solve_time_in_seconds > 0.0)) {
+    if (error) *error = "max_solve_time_in_seconds: expected a positive number, got " + std::to_string(max_solve_time_in_seconds);
+    return false;
+  }
+  return true;
 }
 
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
@@ -197,6 +209,27 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   TemporalResult result = problem.limits.max_jerk ? SolveJerkLimited(problem) : SolvePaperOrCertified(problem);
+  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 &&
+      (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
+    // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.
+    IpoptTemporalOptions fallback;
+    fallback.max_solve_time_in_seconds = jerk_ipopt_fallback_seconds();
+    TemporalResult exact = MakeIpoptTemporalSolver(fallback)->Solve(problem);
+    exact.build_time_seconds += result.build_time_seconds;
+    exact.solve_time_seconds += result.solve_time_seconds;
+    exact.iterations += result.iterations;
+    // Only an answer is taken: Ipopt's "infeasible" on the non-convex rows is a local verdict, not
+    // a certificate.
+    if (exact.status == TemporalStatus::kOptimal) {
+      exact.message = "the conic solves failed (" + result.message + "); solved by Ipopt's exact jerk rows" +
+                      (exact.message.empty() ? std::string() : ": " + exact.message);
+      return exact;
+    }
+    result.message += "; Ipopt's exact jerk rows did not solve it either (" + exact.message + ")";
+    result.build_time_seconds = exact.build_time_seconds;
+    result.solve_time_seconds = exact.solve_time_seconds;
+    result.iterations = exact.iterations;
+  }
   if (result.status != TemporalStatus::kInfeasible) return result;
   // Why, and (asked for) the closest boundary speeds: only infeasible problems pay for this.
   std::optional<internal::RelaxedSpeeds> relaxed;

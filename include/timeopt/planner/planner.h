@@ -95,7 +95,16 @@ struct PlannerOptions {
   double rho = 0.0;  // acceleration regularization (paper eq. 27)
   // kCertified (default): the limits hold on the whole trajectory. kPaper: the paper's rows.
   ConstraintMode constraint_mode = ConstraintMode::kCertified;
-  SocpTemporalOptions socp;
+  // The temporal solver's options. The planner turns the jerk-limited fallback to Ipopt off
+  // (jerk_ipopt_fallback_seconds 0): its pieces are short (max_segment_length), where the conic
+  // solves do not fail for length, and the failures it does meet (a re-planned start exactly at a
+  // limit) Ipopt does not solve either, after up to its whole CPU cap; its own start relaxation
+  // answers those in milliseconds.
+  SocpTemporalOptions socp = [] {
+    SocpTemporalOptions o;
+    o.jerk_ipopt_fallback_seconds = 0.0;
+    return o;
+  }();
 
   bool IsValid(std::string* error) const;
 };

@@ -5,6 +5,7 @@
 // problem, so they agree up to their tolerances. Their statuses and results are in
 // temporal_result.h; the SOCP itself, for other conic solvers, in temporal_socp.h.
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +39,9 @@ class TemporalSolver {
   // How the backend takes the jerk limit (limits.max_jerk set): kLinearized, the sequential convex
   // programme (the SOCP backend); kExact, one solve with the non-convex cubic rows (Ipopt).
   virtual JerkRows jerk_rows() const { return JerkRows::kLinearized; }
+  // CPU seconds for retrying a failed jerk-limited solve with the Ipopt backend's exact rows (0:
+  // no retry).
+  virtual double jerk_ipopt_fallback_seconds() const { return 0.0; }
 
  private:
   // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited, or one solve
@@ -66,9 +70,17 @@ struct SocpTemporalOptions {
   // tolerances; anything else goes to the conic solver, which then decides (statuses never depend
   // on it). m = 10, K = 50, paper mode: 1.3 ms against 4.5 ms. false: always the conic solver.
   bool structured = true;
+  // Jerk-limited mode: when the sequential convex programme ends in a numerical error or the
+  // iteration limit, solve the exact jerk rows with the Ipopt backend instead, for at most this
+  // many CPU seconds (0: never). An optimal answer is taken (result.solver then says "ipopt" and
+  // the message why); anything else keeps the conic status, its message naming both. The conic
+  // solves lose their accuracy on long pieces, where the jerk ramps are a small fraction of the
+  // time (a single 300 m quintic at vmax 2: T ~ 117 s against ramps of 0.2 s); Ipopt solves those
+  // in 0.4-0.9 s. 20 s ends a problem neither can solve with a status.
+  double jerk_ipopt_fallback_seconds = 20.0;
 
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
-  // and finite and max_iterations >= 1.
+  // and finite, max_iterations >= 1 and jerk_ipopt_fallback_seconds >= 0.
   bool IsValid(std::string* error) const;
 };
 
@@ -78,6 +90,9 @@ struct IpoptTemporalOptions {
   double tolerance = 1e-10;
   // Ipopt's `max_iter`. 3000.
   int max_iterations = 3000;
+  // Ipopt's `max_cpu_time`, seconds of CPU time for one solve (Debian's Ipopt 3.11 has no wall-time
+  // limit); the solve then ends with kIterationLimit. Infinite: Ipopt's own cap of 1e6 s.
+  double max_solve_time_in_seconds = std::numeric_limits<double>::infinity();
 
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
   // and finite and max_iterations >= 0.
