@@ -349,11 +349,29 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   }
   if (limits.max_speed) vref = std::max(vref, *limits.max_speed);
   if (!(vref > 0.0)) vref = 1.0;
+  // With a jerk limit the speed a piece can reach may be far below vref (a 1 cm curve at limits of
+  // 1e4: ~0.4 m/s against 2e4), and x of 1e-9 stalled the solvers. There S_i is the smallest of
+  // the squared speeds each limit alone allows along a length of about T_i: vref^2, aref T_i
+  // (accelerating over it) and (jref T_i^2)^(2/3) (a jerk ramp over it); aref and jref are the
+  // largest finite acceleration and jerk limits. Without a jerk limit the scale stays vref's,
+  // which the paper's and certified rows were measured with.
+  double aref = 0.0, jref = 0.0;
+  if (limits.max_jerk) {
+    for (int a = 0; a < 3; ++a) {
+      if (std::isfinite(limits.max_acceleration(a))) aref = std::max(aref, limits.max_acceleration(a));
+      if (std::isfinite((*limits.max_jerk)(a))) jref = std::max(jref, (*limits.max_jerk)(a));
+    }
+    if (limits.max_acceleration_norm) aref = std::max(aref, *limits.max_acceleration_norm);
+  }
   std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
   for (int i = 0; i < m; ++i) {
     double t_max = 0.0;
     for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
-    if (t_max > problem.zero_tangent_tolerance) piece_scale[static_cast<size_t>(i)] = vref * vref / (t_max * t_max);
+    if (!(t_max > problem.zero_tangent_tolerance)) continue;
+    double speed2 = vref * vref;
+    if (aref > 0.0) speed2 = std::min(speed2, aref * t_max);
+    if (jref > 0.0) speed2 = std::min(speed2, std::cbrt(jref * jref * t_max * t_max * t_max * t_max));
+    piece_scale[static_cast<size_t>(i)] = speed2 / (t_max * t_max);
   }
   int next_var = 0;
   for (int i = 0; i < m; ++i) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "timeopt/core/enum_strings.h"
 #include "infeasibility.h"
@@ -42,6 +43,113 @@ bool FromString(const std::string& text, TemporalBackend* backend) {
 }
 
 namespace {
+
+// True when the problem is feasible by construction: at rest at both ends (zero boundary
+// velocities and accelerations), with limits that let the vehicle hover with room to spare
+// (max_thrust above gravity, min_thrust below it; the other limits are positive). Then the same
+// path taken slowly enough is a solution: velocity, acceleration and jerk shrink like the speed,
+// its square and its cube, on every grid and in every mode.
+bool FeasibleAtRest(const TemporalProblem& p) {
+  const TemporalBoundary& b = p.boundary;
+  if (!b.start_velocity.isZero(0.0) || !b.end_velocity.isZero(0.0) || !b.start_acceleration.isZero(0.0) ||
+      !b.end_acceleration.isZero(0.0)) {
+    return false;
+  }
+  const VehicleLimits& l = p.limits;
+  if (l.max_thrust && !(*l.max_thrust > l.gravity)) return false;
+  if (l.min_thrust && !(*l.min_thrust < l.gravity)) return false;
+  return true;
+}
+
+// Units of the jerk-limited solve. Its rows mix b, b^(1/2) and b^(3/2) (the jerk), so their
+// numbers span powers of the problem's units: a curve of 1e7 m at limits of 1e-4, or of 1 cm at
+// 1e4, gave the conic solver (and Ipopt) values 1e20 apart, false verdicts and stalls. The
+// problem is solved instead in units where the curve's size is 1 and the time is the longest that
+// one limit alone imposes on it (length / speed, sqrt(length / acceleration), cbrt(length / jerk)):
+// the binding limits then are of order 1 and the others larger.
+struct ProblemUnits {
+  double length = 1.0;  // metres
+  double time = 1.0;    // seconds
+};
+
+ProblemUnits UnitsOf(const TemporalProblem& p) {
+  ProblemUnits u;
+  // The size: the largest reach |f(s) - f(0)| <= sum_k |c_k| (k >= 1) of any piece on any axis.
+  double length = 0.0;
+  for (const PolynomialPiece& piece : p.curve.pieces()) {
+    const auto& c = piece.coefficients();
+    if (c.cols() > 1) length = std::max(length, c.rightCols(c.cols() - 1).cwiseAbs().rowwise().sum().maxCoeff());
+  }
+  if (!(length > 0.0) || !std::isfinite(length)) return u;
+  double time = 0.0;
+  const auto limit = [&](double value, double order) {
+    if (std::isfinite(value) && value > 0.0) time = std::max(time, std::pow(length / value, 1.0 / order));
+  };
+  const VehicleLimits& l = p.limits;
+  for (int a = 0; a < 3; ++a) {
+    limit(l.max_velocity(a), 1.0);
+    limit(l.max_acceleration(a), 2.0);
+    if (l.max_jerk) limit((*l.max_jerk)(a), 3.0);
+  }
+  if (l.max_speed) limit(*l.max_speed, 1.0);
+  if (l.max_acceleration_norm) limit(*l.max_acceleration_norm, 2.0);
+  if (!(time > 0.0) || !std::isfinite(time)) return u;
+  u.length = length;
+  u.time = time;
+  return u;
+}
+
+// The same problem in units `u` (lengths divided by u.length, times by u.time); false when a value
+// would not stay finite and valid there.
+bool InUnits(const TemporalProblem& p, const ProblemUnits& u, TemporalProblem* out) {
+  TemporalProblem& q = *out;
+  q = p;
+  std::vector<PolynomialPiece> pieces;
+  pieces.reserve(p.curve.pieces().size());
+  for (const PolynomialPiece& piece : p.curve.pieces()) pieces.emplace_back(piece.coefficients() / u.length);
+  q.curve = PiecewiseCurve(std::move(pieces));
+  const double velocity = u.time / u.length, acceleration = velocity * u.time, jerk = acceleration * u.time;
+  VehicleLimits& l = q.limits;
+  l.max_velocity *= velocity;
+  l.max_acceleration *= acceleration;
+  if (l.max_jerk) *l.max_jerk *= jerk;
+  if (l.max_speed) *l.max_speed *= velocity;
+  if (l.max_acceleration_norm) *l.max_acceleration_norm *= acceleration;
+  if (l.max_thrust) *l.max_thrust *= acceleration;
+  if (l.min_thrust) *l.min_thrust *= acceleration;
+  l.gravity *= acceleration;
+  q.boundary.start_velocity *= velocity;
+  q.boundary.end_velocity *= velocity;
+  q.boundary.start_acceleration *= acceleration;
+  q.boundary.end_acceleration *= acceleration;
+  q.zero_tangent_tolerance /= u.length;
+  try {
+    q.Validate();
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+  return true;
+}
+
+// `solve` (the jerk-limited solve) on the problem in its own units (ProblemUnits), the answer
+// back in seconds. An infeasible or invalid verdict comes from the problem as given, so that its
+// message quotes the user's numbers.
+template <typename Solve>
+TemporalResult SolveInUnits(const TemporalProblem& problem, const Solve& solve) {
+  const ProblemUnits u = UnitsOf(problem);
+  TemporalProblem scaled;
+  if ((u.length == 1.0 && u.time == 1.0) || !InUnits(problem, u, &scaled)) return solve(problem);
+  TemporalResult result = solve(scaled);
+  if (result.status == TemporalStatus::kInfeasible || result.status == TemporalStatus::kInvalidInput) {
+    return solve(problem);
+  }
+  result.total_time *= u.time;
+  result.objective *= u.time;
+  for (double& t : result.piece_durations) t *= u.time;
+  for (double& t : result.scp_history) t *= u.time;
+  if (result.status == TemporalStatus::kOptimal) result.profile = result.profile.TimeScaled(u.time);
+  return result;
+}
 
 // The checks both backends' options share: a positive finite tolerance and an iteration limit of
 // at least `min_iterations`.
@@ -208,7 +316,18 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
 }  // namespace internal
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
-  TemporalResult result = problem.limits.max_jerk ? SolveJerkLimited(problem) : SolvePaperOrCertified(problem);
+  TemporalResult result =
+      problem.limits.max_jerk
+          ? SolveInUnits(problem, [this](const TemporalProblem& p) { return SolveJerkLimited(p); })
+          : SolvePaperOrCertified(problem);
+  if (result.status == TemporalStatus::kInfeasible && FeasibleAtRest(problem)) {
+    // A certificate for a problem that has a solution by construction: the solver's rounding, not
+    // the limits (seen on a 1e7 m curve at limits of 1e-4 in the jerk-limited mode).
+    result.status = TemporalStatus::kNumericalError;
+    result.message = "the solver reported no feasible time allocation (" + result.message +
+                     "), but a rest-to-rest problem whose limits allow hovering always has one (the "
+                     "same path, slowly enough): a numerical failure";
+  }
   if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 &&
       (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
     // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.

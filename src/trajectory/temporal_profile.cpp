@@ -216,6 +216,23 @@ TemporalProfile::TemporalProfile(std::vector<std::vector<double>> b) : b_(std::m
   }
 }
 
+TemporalProfile TemporalProfile::TimeScaled(double factor) const {
+  if (!std::isfinite(factor) || !(factor > 0.0)) {
+    throw std::invalid_argument("TemporalProfile::TimeScaled: expected a positive finite factor, got " +
+                                std::to_string(factor));
+  }
+  TemporalProfile scaled = *this;
+  const double b_factor = 1.0 / (factor * factor);
+  for (std::vector<double>& piece : scaled.b_) {
+    for (double& b : piece) b *= b_factor;
+  }
+  for (std::vector<double>& piece : scaled.half_b_) {
+    for (double& b : piece) b *= b_factor;
+  }
+  for (double& t : scaled.cell_start_) t *= factor;
+  return scaled;
+}
+
 TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> half_b,
                                              std::vector<std::vector<CellShape>> shapes,
                                              std::vector<std::vector<double>> cell_edges) {

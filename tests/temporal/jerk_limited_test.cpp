@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 #include <string>
 #include <utility>
@@ -231,8 +232,8 @@ TemporalProblem LongQuintic(double size, double limit_scale) {
 // 300 m at vmax 2: T ~ 117 s against jerk ramps of ~0.2 s) and end in a numerical error; the SOCP
 // backend then solves the exact rows with Ipopt. The answer must be Ipopt's own (the same solver
 // on the same rows: T to 1e-12 relative), flyable (dense ratios within the 1e-6 of the rows'
-// tolerances), and say what happened. Where neither solves it (a 1 cm curve at limits of 1e4), the
-// fallback's CPU cap ends the solve with a status naming both.
+// tolerances), and say what happened. Where neither solves it in time, the fallback's CPU cap
+// ends the solve with a status naming both.
 TEST(JerkLimited, AFailedConicSolveFallsBackToTheExactRowsWithinItsCap) {
   const TemporalProblem long_piece = LongQuintic(30.0, 1.0);
   const TemporalResult socp = MakeSocpTemporalSolver()->Solve(long_piece);
@@ -252,16 +253,60 @@ TEST(JerkLimited, AFailedConicSolveFallsBackToTheExactRowsWithinItsCap) {
   EXPECT_LE(socp.max_acceleration_ratio, 1.0 + 1e-6);
   EXPECT_LE(socp.max_jerk_ratio, 1.0 + 1e-6);
 
+  // The cap: conic solves stopped by an iteration limit of 5, and a fallback given 1e-6 CPU s.
   SocpTemporalOptions capped;
-  capped.jerk_ipopt_fallback_seconds = 1.0;
-  // (Should a later change solve this one, it no longer exercises the cap: pick a harder case.)
-  const TemporalResult hopeless = MakeSocpTemporalSolver(capped)->Solve(LongQuintic(1e-3, 1e4));
+  capped.max_iterations = 5;
+  capped.jerk_ipopt_fallback_seconds = 1e-6;
+  const TemporalResult hopeless = MakeSocpTemporalSolver(capped)->Solve(LongQuintic(1.0, 1.0));
   EXPECT_EQ(hopeless.status, TemporalStatus::kIterationLimit) << hopeless.message;
   EXPECT_THAT(hopeless.message, HasSubstr("Ipopt's exact jerk rows did not solve it either"));
   EXPECT_THAT(hopeless.message, HasSubstr("CPU time limit"));
   SocpTemporalOptions negative;
   negative.jerk_ipopt_fallback_seconds = -1.0;
   EXPECT_THROW(MakeSocpTemporalSolver(negative), std::invalid_argument);
+}
+
+// Units. The jerk-limited solve runs in the problem's own units (curve size 1, time of the binding
+// limit), so the same problem in micrometres, metres or 1000 km (curve and limits scaled
+// together: the same motion) must give the same T to 1e-9, the rounding of the rows, and ratios
+// that do not move either; both backends. Badly proportioned problems (a 1 cm curve at limits of
+// 1e4, where the speed limit is 5e4 times what the jerk allows; a 1e7 m curve at 1e-4) are
+// solved, and a speed limit that cannot bind does not change T: 1e2, 1e4 and 1e8 against the same
+// acceleration and jerk give the same T to 1e-8 (two solves of different rows to the solver's
+// tolerances).
+TEST(JerkLimited, TheAnswerDoesNotDependOnUnitsOrOnLimitsThatCannotBind) {
+  for (const TemporalBackend backend : kTemporalBackends) {
+    std::unique_ptr<TemporalSolver> solver = MakeTemporalSolver(backend);
+    const TemporalResult metres = solver->Solve(LongQuintic(1.0, 1.0));
+    ASSERT_TRUE(metres.is_success()) << metres.message;
+    for (const double unit : {1e-6, 1e-3, 1e3, 1e6}) {
+      const TemporalResult r = solver->Solve(LongQuintic(unit, unit));
+      ASSERT_TRUE(r.is_success()) << ToString(backend) << " unit " << unit << ": " << r.message;
+      EXPECT_NEAR(r.total_time, metres.total_time, 1e-9 * metres.total_time) << ToString(backend) << " " << unit;
+      EXPECT_NEAR(r.max_jerk_ratio, metres.max_jerk_ratio, 1e-6) << ToString(backend) << " " << unit;
+      EXPECT_NEAR(r.profile.total_time(), r.total_time, 1e-9 * r.total_time);
+    }
+  }
+  std::unique_ptr<TemporalSolver> socp = MakeSocpTemporalSolver();
+  for (const auto& [size, limits] : {std::pair<double, double>{1e-2, 1e4}, {1e7, 1e-4}, {1e-3, 1e4}}) {
+    const TemporalResult r = socp->Solve(LongQuintic(size, limits));
+    ASSERT_TRUE(r.is_success()) << size << " m at limits x " << limits << ": " << r.message;
+    EXPECT_EQ(r.solver, "socp") << r.message;  // solved by the conic solves, no fallback
+    EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
+    EXPECT_LE(r.max_acceleration_ratio, 1.0 + 1e-6);
+  }
+  double reference = 0.0;
+  for (const double vmax : {1e2, 1e4, 1e8}) {
+    TemporalProblem p = LongQuintic(1.0, 1.0);
+    p.limits.max_velocity.setConstant(vmax);
+    p.limits.max_acceleration.setConstant(31.0);
+    p.limits.max_jerk = Eigen::Vector3d::Constant(1.0);
+    const TemporalResult r = socp->Solve(p);
+    ASSERT_TRUE(r.is_success()) << "vmax " << vmax << ": " << r.message;
+    EXPECT_LT(r.max_velocity_ratio, 0.1);  // the speed limit indeed does not bind
+    if (reference == 0.0) reference = r.total_time;
+    EXPECT_NEAR(r.total_time, reference, 1e-8 * reference) << "vmax " << vmax;
+  }
 }
 
 TEST(JerkLimited, BadJerkLimitsAreInvalidInputAndUnreachableAccelerationsInfeasible) {

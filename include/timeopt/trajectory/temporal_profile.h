@@ -72,6 +72,11 @@ class TemporalProfile {
                                      std::vector<std::vector<CellShape>> shapes,
                                      std::vector<std::vector<double>> cell_edges = {});
 
+  // The same motion along the path, `factor` times slower (factor > 0 and finite; below 1:
+  // faster): every b divided by factor^2, every time multiplied by factor, the shapes and cells
+  // unchanged. Throws std::invalid_argument for another factor.
+  TemporalProfile TimeScaled(double factor) const;
+
   int num_pieces() const { return static_cast<int>(b_.size()); }
   int cells_per_piece() const { return cells_per_piece_; }
   double ds() const { return 1.0 / cells_per_piece_; }
