@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -48,13 +49,15 @@ namespace {
 // velocities and accelerations), with limits that let the vehicle hover with room to spare
 // (max_thrust above gravity, min_thrust below it; the other limits are positive). Then the same
 // path taken slowly enough is a solution: velocity, acceleration and jerk shrink like the speed,
-// its square and its cube, on every grid and in every mode.
+// its square and its cube, on every grid of two or more cells per piece and in every mode.
 bool FeasibleAtRest(const TemporalProblem& p) {
   const TemporalBoundary& b = p.boundary;
   if (!b.start_velocity.isZero(0.0) || !b.end_velocity.isZero(0.0) || !b.start_acceleration.isZero(0.0) ||
       !b.end_acceleration.isZero(0.0)) {
     return false;
   }
+  // One cell per piece cannot leave rest and reach it again (a grid too coarse, not the limits).
+  if (p.cells_per_piece < 2) return false;
   const VehicleLimits& l = p.limits;
   if (l.max_thrust && !(*l.max_thrust > l.gravity)) return false;
   if (l.min_thrust && !(*l.min_thrust < l.gravity)) return false;
@@ -63,10 +66,13 @@ bool FeasibleAtRest(const TemporalProblem& p) {
 
 // Units of the jerk-limited solve. Its rows mix b, b^(1/2) and b^(3/2) (the jerk), so their
 // numbers span powers of the problem's units: a curve of 1e7 m at limits of 1e-4, or of 1 cm at
-// 1e4, gave the conic solver (and Ipopt) values 1e20 apart, false verdicts and stalls. The
-// problem is solved instead in units where the curve's size is 1 and the time is the longest that
-// one limit alone imposes on it (length / speed, sqrt(length / acceleration), cbrt(length / jerk)):
-// the binding limits then are of order 1 and the others larger.
+// 1e4, gave the conic solver (and Ipopt) values 1e20 apart, false verdicts and stalls. The problem
+// is solved instead in units where the curve's size is 1 and the time is the longest that one
+// limit alone imposes on it (length / speed, sqrt(length / acceleration), cbrt(length / jerk)):
+// the binding limits then are of order 1 and the others larger. (The paper's and certified rows
+// are solved as given: the structured path normalizes its rows, and their tests pin the refusal of
+// coefficients whose squares overflow. Scaling them did not cure the property sweep's stalls on
+// minimum-jerk rest ends either.) Not with lambda_a, which the jerk-limited mode refuses anyway.
 struct ProblemUnits {
   double length = 1.0;  // metres
   double time = 1.0;    // seconds
@@ -74,6 +80,7 @@ struct ProblemUnits {
 
 ProblemUnits UnitsOf(const TemporalProblem& p) {
   ProblemUnits u;
+  if (p.limits.max_acceleration_change) return u;
   // The size: the largest reach |f(s) - f(0)| <= sum_k |c_k| (k >= 1) of any piece on any axis.
   double length = 0.0;
   for (const PolynomialPiece& piece : p.curve.pieces()) {
@@ -123,6 +130,9 @@ bool InUnits(const TemporalProblem& p, const ProblemUnits& u, TemporalProblem* o
   q.boundary.start_acceleration *= acceleration;
   q.boundary.end_acceleration *= acceleration;
   q.zero_tangent_tolerance /= u.length;
+  // J = T + rho sum a^2 ds with a = sddot: T = time T', a = a' / time^2, so J = time (T' + rho'
+  // sum a'^2 ds) with rho' = rho / time^5.
+  q.rho = p.rho / std::pow(u.time, 5.0);
   try {
     q.Validate();
   } catch (const std::invalid_argument&) {
@@ -131,17 +141,24 @@ bool InUnits(const TemporalProblem& p, const ProblemUnits& u, TemporalProblem* o
   return true;
 }
 
-// `solve` (the jerk-limited solve) on the problem in its own units (ProblemUnits), the answer
-// back in seconds. An infeasible or invalid verdict comes from the problem as given, so that its
-// message quotes the user's numbers.
-template <typename Solve>
-TemporalResult SolveInUnits(const TemporalProblem& problem, const Solve& solve) {
+// `solve` on the problem in its own units (ProblemUnits), the answer back in seconds. An invalid
+// verdict comes from the problem as given; so does an infeasible verdict's message when the
+// presolve (`discretize`, cheap) finds it, since those messages quote the user's numbers.
+template <typename Solve, typename Discretize>
+TemporalResult SolveInUnits(const TemporalProblem& problem, const Solve& solve, const Discretize& discretize) {
   const ProblemUnits u = UnitsOf(problem);
   TemporalProblem scaled;
   if ((u.length == 1.0 && u.time == 1.0) || !InUnits(problem, u, &scaled)) return solve(problem);
   TemporalResult result = solve(scaled);
-  if (result.status == TemporalStatus::kInfeasible || result.status == TemporalStatus::kInvalidInput) {
-    return solve(problem);
+  if (result.status == TemporalStatus::kInvalidInput) return solve(problem);
+  if (result.status == TemporalStatus::kInfeasible) {
+    try {
+      const TemporalDiscretization d = discretize(problem);
+      if (d.infeasible_reason) result.message = *d.infeasible_reason;
+    } catch (const std::exception&) {
+      return solve(problem);
+    }
+    return result;
   }
   result.total_time *= u.time;
   result.objective *= u.time;
@@ -318,7 +335,9 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   TemporalResult result =
       problem.limits.max_jerk
-          ? SolveInUnits(problem, [this](const TemporalProblem& p) { return SolveJerkLimited(p); })
+          ? SolveInUnits(
+                problem, [this](const TemporalProblem& p) { return SolveJerkLimited(p); },
+                [](const TemporalProblem& p) { return DiscretizeJerkLimited(p, JerkRows::kNone, nullptr); })
           : SolvePaperOrCertified(problem);
   if (result.status == TemporalStatus::kInfeasible && FeasibleAtRest(problem)) {
     // A certificate for a problem that has a solution by construction: the solver's rounding, not
