@@ -34,6 +34,8 @@ TEST_PACKAGES=(
   libbenchmark-dev                  # find_package(benchmark): benchmarks/
   libdynamicedt3d-dev               # find_package(dynamicEDT3D): the ESDF comparison test
   python3-cvxopt python3-numpy      # tests/temporal/cvxopt_cross_check.py (second solver)
+  pybind11-dev python3-dev          # the Python module (TIMEOPT_BUILD_PYTHON)
+  python3-pytest python3-scipy      # tests/python (pytest; scipy.sparse for the conic solver)
 )
 
 # Fuzzing (scripts/fuzz.sh, TIMEOPT_BUILD_FUZZERS).
