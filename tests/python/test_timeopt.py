@@ -246,3 +246,17 @@ def test_no_leak_over_ten_thousand_solves():
         result = timeopt.solve(problem)
         _ = result.piece_durations, result.profile.b
     assert rss_bytes() - before < 8 * 1024 * 1024
+
+
+def test_the_type_stub_names_every_public_attribute():
+    # python/timeopt.pyi must not fall behind the module: every public name of the module and of
+    # its conic submodule is declared there (classes, functions, enums).
+    import ast
+
+    tree = ast.parse(open(os.path.join(SOURCE, "python", "timeopt.pyi")).read())
+    top = {node.name for node in tree.body if isinstance(node, (ast.ClassDef, ast.FunctionDef))}
+    conic_class = next(node for node in tree.body if isinstance(node, ast.ClassDef) and node.name == "conic")
+    in_conic = {node.name for node in conic_class.body if isinstance(node, (ast.ClassDef, ast.FunctionDef))}
+    public = {name for name in dir(timeopt) if not name.startswith("_")}
+    assert public - top == set()
+    assert {name for name in dir(timeopt.conic) if not name.startswith("_")} - in_conic == set()
