@@ -142,7 +142,8 @@ class OccupancyMap:
 
 class Esdf:
     @staticmethod
-    def from_map(map: OccupancyMap, box_min: Optional[ArrayLike] = None, box_max: Optional[ArrayLike] = None) -> Esdf: ...
+    def from_map(map: OccupancyMap, box_min: Optional[ArrayLike] = None, box_max: Optional[ArrayLike] = None,
+                 max_memory_mb: float = 0.0) -> Esdf: ...
     @property
     def resolution(self) -> float: ...
     @property

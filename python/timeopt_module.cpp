@@ -220,7 +220,8 @@ ConstraintMode ModeFrom(const std::string& text) {
 
 // ---- the planner ----
 
-PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margin, bool* whole_map) {
+PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margin, bool* whole_map,
+                                  double* max_memory_mb) {
   PlannerOptions o;
   if (kwargs.contains("config")) o = ReadPlannerConfigJson(kwargs["config"].cast<std::string>(), o);
   for (const auto& item : kwargs) {
@@ -248,11 +249,15 @@ PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margi
       *region_margin = value.cast<double>();
     } else if (key == "whole_map") {
       *whole_map = value.cast<bool>();
+    } else if (key == "max_memory_mb") {
+      *max_memory_mb = value.cast<double>();
+      if (!(*max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
     } else {
       throw py::type_error("plan: unknown keyword '" + key +
                            "' (expected config, max_velocity, max_acceleration, max_jerk, max_speed, "
                            "max_acceleration_norm, max_thrust, min_thrust, max_tilt, robot_radius, safety_margin, K, "
-                           "constraint_mode, start_velocity, start_acceleration, max_attempts, region_margin, whole_map)");
+                           "constraint_mode, start_velocity, start_acceleration, max_attempts, region_margin, whole_map, "
+                           "max_memory_mb)");
     }
   }
   std::string error;
@@ -625,14 +630,16 @@ PYBIND11_MODULE(timeopt, m) {
   py::class_<Esdf>(m, "Esdf", "A Euclidean signed distance field (metres; negative inside obstacles) with gradients.")
       .def_static(
           "from_map",
-          [](const OccupancyMap& map, const py::object& box_min, const py::object& box_max) {
+          [](const OccupancyMap& map, const py::object& box_min, const py::object& box_max, double max_memory_mb) {
             std::optional<Eigen::AlignedBox3d> box;
             if (!box_min.is_none() || !box_max.is_none()) box = Eigen::AlignedBox3d(Vec3(box_min, "box_min"), Vec3(box_max, "box_max"));
+            if (!(max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
             py::gil_scoped_release release;
-            return Esdf::FromMap(map, box);
+            return Esdf::FromMap(map, box, static_cast<int64_t>(max_memory_mb * 1024 * 1024));
           },
-          py::arg("map"), py::arg("box_min") = py::none(), py::arg("box_max") = py::none(),
-          "The field over the map's known box, or over [box_min, box_max]. Releases the GIL.")
+          py::arg("map"), py::arg("box_min") = py::none(), py::arg("box_max") = py::none(), py::arg("max_memory_mb") = 0.0,
+          "The field over the map's known box, or over [box_min, box_max]. max_memory_mb > 0: a budget for its\n"
+          "peak memory (9 bytes per voxel), refused with ValueError before allocating. Releases the GIL.")
       .def_property_readonly("resolution", &Esdf::resolution)
       .def_property_readonly("memory_bytes", &Esdf::memory_bytes)
       .def_property_readonly(
@@ -689,7 +696,9 @@ PYBIND11_MODULE(timeopt, m) {
         const Eigen::Vector3d s = Vec3(start, "start"), g = Vec3(goal, "goal");
         double region_margin = 10.0;
         bool whole_map = false;
-        const PlannerOptions options = PlannerOptionsFrom(kwargs, &region_margin, &whole_map);
+        double max_memory_mb = 0.0;
+        const PlannerOptions options = PlannerOptionsFrom(kwargs, &region_margin, &whole_map, &max_memory_mb);
+        const int64_t budget = static_cast<int64_t>(max_memory_mb * 1024 * 1024);
         if (py::isinstance<Esdf>(map)) {
           const Esdf& esdf = map.cast<const Esdf&>();
           py::gil_scoped_release release;
@@ -702,14 +711,16 @@ PYBIND11_MODULE(timeopt, m) {
         Eigen::AlignedBox3d region(s.cwiseMin(g), s.cwiseMax(g));
         region.min().array() -= region_margin;
         region.max().array() += region_margin;
-        const Esdf esdf = whole_map ? Esdf::FromMap(occupancy) : Esdf::FromMapRegion(occupancy, region);
+        const Esdf esdf =
+            whole_map ? Esdf::FromMap(occupancy, std::nullopt, budget) : Esdf::FromMapRegion(occupancy, region, budget);
         return Plan(esdf, s, g, options);
       },
       py::arg("map"), py::arg("start"), py::arg("goal"),
       "Plans from start to goal on a map (an Esdf, an OccupancyMap or a .bt/.ot path; the field then covers the\n"
       "start-goal box grown by region_margin = 10 m unless whole_map=True), as `timeopt plan` does. Keywords:\n"
       "config (a planner config JSON path), max_velocity, max_acceleration, max_jerk, quadrotor limits, robot_radius,\n"
-      "safety_margin, K, constraint_mode, start_velocity, start_acceleration, max_attempts. Releases the GIL.");
+      "safety_margin, K, constraint_mode, start_velocity, start_acceleration, max_attempts, max_memory_mb (a budget\n"
+      "for the field's peak memory; 0, the default: none). Releases the GIL.");
 
   // ---- simulation ----
   py::class_<FeasibilityReport>(m, "FlightReport", "A simulated flight: whether every limit held, and the largest ratios.")

@@ -4,12 +4,15 @@
 # (Release, tests on). Each process prints its failures, unresolved outcomes and a summary; the
 # logs are build/sweep_<part>.log. Exit 1 if any problem failed.
 #
-#   scripts/sweep.sh [COUNT] [SEED]
+#   scripts/sweep.sh [COUNT] [SEED] [OPTIONS...]
+#
+# OPTIONS go to every process (e.g. --ipopt-seconds 2 --max-jerk-cells 30, ctest's settings).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH
 count="${1:-10000}"
 seed="${2:-1}"
+shift $(($# < 2 ? $# : 2))
 for value in "$count" "$seed"; do
   if ! [[ "$value" =~ ^[0-9]+$ ]]; then
     echo "sweep: COUNT and SEED must be non-negative integers, got '$value'" >&2
@@ -26,7 +29,7 @@ for ((part = 0; part < parts; ++part)); do
   first=$((part * per_part))
   n=$((count - first < per_part ? count - first : per_part))
   [[ $n -gt 0 ]] || break
-  build/timeopt_property_sweep --seed "$seed" --first "$first" --count "$n" >"build/sweep_$part.log" 2>&1 &
+  build/timeopt_property_sweep --seed "$seed" --first "$first" --count "$n" "$@" >"build/sweep_$part.log" 2>&1 &
   pids+=($!)
 done
 status=0

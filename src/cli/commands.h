@@ -4,6 +4,9 @@
 // sets `run` to the function that executes it after parsing; the function returns the exit code.
 // Exit codes: 0 success, 2 invalid input or unreadable file, 3 infeasible, 1 anything else.
 
+#include <unistd.h>
+
+#include <cstdint>
 #include <functional>
 #include <optional>
 
@@ -33,6 +36,22 @@ inline constexpr const char* kFlightNote =
 // command over each 1 ms step, so it lags a continuous reference by a little (measured 0.2-0.5%
 // above the acceleration limit on the shipped plans); 1% is the product's flight criterion.
 inline constexpr double kJerkLimitedFlightTolerance = 0.01;
+
+// The distance field's memory budget for --max-memory (MiB): half of this machine's physical
+// memory, so that a map too large for the machine is refused with a message (exit 2) before the
+// field is allocated, not killed by the kernel. 4096 where the machine does not say.
+inline int64_t DefaultMemoryBudgetMiB() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages <= 0 || page <= 0) return 4096;
+  return static_cast<int64_t>(pages) * page / 2 / (1024 * 1024);
+}
+inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
+  sub->add_option("--max-memory", *mebibytes,
+                  "Memory budget of the distance field, MiB (its peak is 9 bytes per voxel); default: half "
+                  "of this machine's memory")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
+      ->capture_default_str();
+}
 
 // The default quadrotor for the summaries' flights, with the verdict's slack for `limits`.
 inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {

@@ -191,12 +191,13 @@ struct SliceArgs {
   std::string output;
   std::string unknown = ToString(UnknownSpace::kFree);
   SliceImageOptions image;
+  int64_t max_memory_mib = DefaultMemoryBudgetMiB();
 };
 
 int RunSlice(const SliceArgs& args) {
   const OccupancyMap map = OccupancyMap::Load(args.map, ParseUnknown(args.unknown));
   const auto start = std::chrono::steady_clock::now();
-  const Esdf esdf = Esdf::FromMap(map);
+  const Esdf esdf = Esdf::FromMap(map, std::nullopt, args.max_memory_mib * 1024 * 1024);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteEsdfSlicePng(esdf, args.z, args.output, args.image);
@@ -229,6 +230,7 @@ void RegisterMapCommand(CLI::App& app, Runner& run) {
   slice_app->add_option("--z", slice->z, "Height of the slice, m")->required();
   slice_app->add_option("-o,--output", slice->output, "Output PNG file")->required();
   AddUnknownOption(slice_app, &slice->unknown);
+  AddMemoryBudgetOption(slice_app, &slice->max_memory_mib);
   slice_app->add_option("--pixels-per-voxel", slice->image.pixels_per_voxel,
                         "Image pixels per voxel edge")
       ->capture_default_str();

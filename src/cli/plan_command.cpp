@@ -51,6 +51,7 @@ struct PlanArgs {
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
   double region_margin = kDefaultRegionMargin;  // metres around start and goal; see --region-margin
+  int64_t max_memory_mib = DefaultMemoryBudgetMiB();
   bool whole_map = false;
   QuadrotorLimitArgs quadrotor;  // in addition to the per-axis limits the planner needs
 };
@@ -112,7 +113,9 @@ int RunPlan(PlanArgs args) {
   Eigen::AlignedBox3d region(start.cwiseMin(goal), start.cwiseMax(goal));
   region.min().array() -= args.region_margin;
   region.max().array() += args.region_margin;
-  const Esdf esdf = args.whole_map ? Esdf::FromMap(map) : Esdf::FromMapRegion(map, region);
+  const int64_t budget = args.max_memory_mib * 1024 * 1024;
+  const Esdf esdf =
+      args.whole_map ? Esdf::FromMap(map, std::nullopt, budget) : Esdf::FromMapRegion(map, region, budget);
   const double esdf_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
   Planner planner(esdf);
   const PlanResult plan = planner.Plan(start, goal, options);
@@ -236,6 +239,7 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_flag("--whole-map", args->whole_map, "The distance field covers the whole map (no region of interest)");
+  AddMemoryBudgetOption(sub, &args->max_memory_mib);
   sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <memory>
 #include <new>
@@ -257,7 +258,25 @@ Esdf::Esdf(const OccupancyGrid& grid) {
                .select(half - SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res, values);
 }
 
-Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box) {
+namespace {
+
+// The budget check of FromMap and FromMapRegion, before anything is allocated.
+void CheckBudget(const VoxelBox& voxels, int64_t max_bytes) {
+  // Above the dense grid's own cap, the grid refuses it with a message that does not depend on the
+  // machine's budget.
+  if (max_bytes <= 0 || Esdf::PeakBytes(voxels) <= max_bytes || voxels.num_voxels() > kMaxGridVoxels) return;
+  std::ostringstream message;
+  constexpr double kMiB = 1024.0 * 1024.0;
+  message << std::fixed << std::setprecision(2) << "the distance field over " << voxels.size(0) << " x " << voxels.size(1) << " x "
+          << voxels.size(2) << " voxels needs " << static_cast<double>(Esdf::PeakBytes(voxels)) / kMiB
+          << " MiB at its peak, above the memory budget of " << static_cast<double>(max_bytes) / kMiB
+          << " MiB (a smaller region, a coarser map, or a larger budget)";
+  throw std::invalid_argument(message.str());
+}
+
+}  // namespace
+
+Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box, int64_t max_bytes) {
   VoxelBox voxels;
   if (box) {
     voxels = VoxelBox::Covering(*box, map.resolution());
@@ -267,10 +286,11 @@ Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBo
     }
     voxels = map.KnownBox();
   }
+  CheckBudget(voxels, max_bytes);
   return Esdf(map.Rasterize(voxels));
 }
 
-Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region) {
+Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region, int64_t max_bytes) {
   if (map.empty()) throw std::invalid_argument("the map is empty (no known voxel)");
   const VoxelBox known = map.KnownBox();
   const VoxelBox wanted = VoxelBox::Covering(region, map.resolution());
@@ -284,6 +304,7 @@ Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& reg
             << "] - [" << known.Metric(map.resolution()).max().transpose() << "] m";
     throw std::invalid_argument(message.str());
   }
+  CheckBudget(box, max_bytes);
   OccupancyGrid grid = map.Rasterize(box);
   // The cut faces: a face of the region strictly inside the known box.
   for (int axis = 0; axis < 3; ++axis) {

@@ -11,10 +11,6 @@ namespace {
 // OctoMap keys are 16 bit with the origin at 32768, so world voxel indices span this range.
 constexpr int kMinIndex = -32768;
 constexpr int kMaxIndex = 32767;
-// Largest dense grid: 1 byte of occupancy and 4 of distance per voxel, so 2e8 voxels are ~1 GB
-// (plus the transform's per-plane scratch). The shared geb079 map is 3.6e6; a 40-byte .bt whose
-// root is a leaf spans 2.8e14 and used to end as a bare bad_alloc.
-constexpr int64_t kMaxGridVoxels = 200'000'000;
 
 }  // namespace
 

@@ -1,11 +1,15 @@
 #include "timeopt/map/esdf.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <optional>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "timeopt/map/occupancy_map.h"
@@ -305,6 +309,25 @@ TEST(EsdfTest, InvalidGridsThrowClearErrors) {
 // wherever the whole map's nearest obstacle is closer than the nearest cut layer (it then lies
 // inside the region): both facts follow from the definition, so they are asserted exactly, up to
 // float storage. On a forest with cuts on four faces and none in z.
+// The memory budget: a field whose peak (9 bytes per voxel) is at the budget is built, one byte
+// less is refused with both figures in the message, for the whole map and for a region.
+TEST(EsdfTest, AMemoryBudgetRefusesFieldsAboveItBeforeBuilding) {
+  const test_support::ForestFixture forest(4, 0.15);
+  const int64_t whole = Esdf::PeakBytes(forest.map.KnownBox());
+  EXPECT_EQ(whole, forest.map.KnownBox().num_voxels() * 9);
+  EXPECT_NO_THROW(Esdf::FromMap(forest.map, std::nullopt, whole));
+  try {
+    Esdf::FromMap(forest.map, std::nullopt, whole - 1);
+    ADD_FAILURE() << "a field above its budget was built";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("above the memory budget"));
+  }
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(2.0, 1.0, -5.0), Eigen::Vector3d(8.0, 9.0, 5.0));
+  const Esdf part = Esdf::FromMapRegion(forest.map, region, Esdf::PeakBytes(VoxelBox{{20, 10, 0}, {60, 80, 30}}));
+  EXPECT_EQ(part.box().num_voxels(), 60 * 80 * 30);
+  EXPECT_THROW(Esdf::FromMapRegion(forest.map, region, 60 * 80 * 30 * 9 - 1), std::invalid_argument);
+}
+
 TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
   const test_support::ForestFixture forest(4, 0.15);
   const Esdf whole = Esdf::FromMap(forest.map);

@@ -148,6 +148,14 @@ TEST_F(PlanCommand, ARegionOfInterestPlansAsTheWholeMapOverFewerVoxels) {
   // Region: x in [0, 4], y in [0, 2.7], z in [0, 3] (clipped to the map) against 8 x 8 x 3 m.
   EXPECT_EQ(r["esdf_box"]["voxels"].get<int64_t>(), 40 * 27 * 30);
   EXPECT_EQ(w["esdf_box"]["voxels"].get<int64_t>(), 80 * 80 * 30);
+  // The memory budget (9 bytes per voxel at the peak): 1 MiB takes the region (0.28 MiB) and
+  // refuses the whole map (1.65 MiB) with exit 2, naming both figures, before allocating.
+  const PlanRun budget_region = RunPlan(route + " --region-margin 1.5 --max-memory 1", dir_);
+  EXPECT_EQ(budget_region.exit_code, 0) << budget_region.err;
+  const PlanRun budget_whole = RunPlan(route + " --whole-map --max-memory 1", dir_);
+  EXPECT_EQ(budget_whole.exit_code, 2) << budget_whole.out << budget_whole.err;
+  EXPECT_NE(budget_whole.err.find("needs 1.65 MiB at its peak, above the memory budget of 1.00 MiB"), std::string::npos)
+      << budget_whole.err;
   // The margin must be positive.
   const PlanRun zero = RunPlan(route + " --region-margin 0", dir_);
   EXPECT_EQ(zero.exit_code, 2);

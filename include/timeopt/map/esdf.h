@@ -86,12 +86,18 @@ class Esdf final : public DistanceField {
   // when the grid has no occupied voxel (the distance would be unbounded) or no free voxel.
   explicit Esdf(const OccupancyGrid& grid);
 
+  // Peak memory of building the field over `voxels`: kPeakBytesPerVoxel per voxel (the
+  // rasterized occupancy, a 32-bit work array and the float field).
+  static constexpr int64_t kPeakBytesPerVoxel = 9;
+  static int64_t PeakBytes(const VoxelBox& voxels) { return voxels.num_voxels() * kPeakBytesPerVoxel; }
+
   // Builds the field over `box` (metres, snapped outwards to the voxel lattice) or, without a
   // box, over the map's known box; unknown voxels count as the map's unknown_space() says.
-  // Throws std::invalid_argument for an empty map without a box, a box of zero size, and the
-  // cases of the grid constructor.
+  // max_bytes > 0 is a memory budget: a field whose PeakBytes exceed it is refused before any
+  // allocation (std::invalid_argument with both figures). Throws std::invalid_argument for an
+  // empty map without a box, a box of zero size, and the cases of the grid constructor.
   static Esdf FromMap(const OccupancyMap& map,
-                      const std::optional<Eigen::AlignedBox3d>& box = std::nullopt);
+                      const std::optional<Eigen::AlignedBox3d>& box = std::nullopt, int64_t max_bytes = 0);
 
   // The field over a region of interest of a large map: `region` (metres, snapped outwards to the
   // lattice) clipped to the map's known box. Where the region cuts the map, its outermost voxel
@@ -100,8 +106,8 @@ class Esdf final : public DistanceField {
   // the cut; a planner that keeps its clearance in this field keeps it in the whole map. Memory
   // and time scale with the region, not the map. Throws std::invalid_argument for an empty map,
   // a region that does not overlap the known box or has zero size, and the cases of the grid
-  // constructor.
-  static Esdf FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region);
+  // constructor; max_bytes as for FromMap.
+  static Esdf FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region, int64_t max_bytes = 0);
 
   double Distance(const Eigen::Vector3d& point) const override;
   double DistanceAndGradient(const Eigen::Vector3d& point,

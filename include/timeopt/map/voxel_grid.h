@@ -37,6 +37,11 @@ struct VoxelBox {
   static VoxelBox Covering(const Eigen::AlignedBox3d& box, double resolution);
 };
 
+// Largest dense grid: 1 byte of occupancy and 4 of distance per voxel, so 2e8 voxels are ~1 GB
+// (plus the transform's per-plane scratch). The shared geb079 map is 3.6e6; a 40-byte .bt whose
+// root is a leaf spans 2.8e14 and used to end as a bare bad_alloc.
+inline constexpr int64_t kMaxGridVoxels = 200'000'000;
+
 // Occupancy of every voxel in a box; values are exactly 0 (free) or 1 (occupied).
 struct OccupancyGrid {
   double resolution = 0.0;  // edge length of a voxel, metres
