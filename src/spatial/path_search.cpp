@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <new>
 #include <queue>
 #include <sstream>
 #include <utility>
@@ -137,11 +138,17 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   if (total > std::numeric_limits<int32_t>::max()) {
     return finish(PathSearchStatus::kInvalidInput, "map: too many voxels for the search");
   }
-  if (static_cast<int64_t>(g_.size()) != total) {
-    g_.assign(total, 0.0f);
-    parent_.assign(total, -1);
-    state_.assign(total, 0);
+  if (cells_ != total) {
+    const size_t n = static_cast<size_t>(total);
+    g_.reset(static_cast<float*>(std::malloc(n * sizeof(float))));
+    parent_.reset(static_cast<int32_t*>(std::malloc(n * sizeof(int32_t))));
+    state_.reset(static_cast<uint8_t*>(std::calloc(n, sizeof(uint8_t))));
     touched_.clear();
+    if (!g_ || !parent_ || !state_) {
+      cells_ = 0;
+      throw std::bad_alloc();
+    }
+    cells_ = total;
   }
   for (const int32_t i : touched_) state_[i] = 0;
   touched_.clear();

@@ -15,6 +15,8 @@
 
 #include <array>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -94,11 +96,18 @@ class PathSearch {
                           const PathSearchOptions& options = {});
 
  private:
+  // Per-voxel arrays that cost memory only where the search writes: state_ is zeroed by calloc and
+  // g_ and parent_ are left uninitialized (read only where state_ is not 0), so the kernel maps
+  // their pages on first touch. A whole-map field of 1e8 voxels no longer costs 900 MB here.
+  struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+  };
   const Esdf* esdf_;
-  std::vector<float> g_;           // cost-to-come per voxel
-  std::vector<int32_t> parent_;    // linear index of the parent, -1 for none
-  std::vector<uint8_t> state_;     // 0 new, 1 open, 2 closed
-  std::vector<int32_t> touched_;   // voxels to reset before the next search
+  int64_t cells_ = 0;                                // size of the arrays below
+  std::unique_ptr<float[], FreeDeleter> g_;          // cost-to-come per voxel
+  std::unique_ptr<int32_t[], FreeDeleter> parent_;   // linear index of the parent, -1 for none
+  std::unique_ptr<uint8_t[], FreeDeleter> state_;    // 0 new, 1 open, 2 closed
+  std::vector<int32_t> touched_;                     // voxels to reset before the next search
 };
 
 }  // namespace timeopt
