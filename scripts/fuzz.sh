@@ -7,13 +7,23 @@
 # The seeds are copied to build-fuzz/corpus/<target>/, which is where new inputs go, so the
 # committed corpus changes only by hand. A crash, a sanitizer report, a leak, a timeout (10 s per
 # input) or more than 2 GB of memory ends that target with its reproducer in build-fuzz/artifacts/;
-# add it under tests/fuzz/corpus/<target>/ and as a regression test. Exit 1 if any target failed.
+# add it under tests/fuzz/corpus/<target>/ and as a regression test. Then the long randomized
+# property sweep of the temporal solve (scripts/sweep.sh) runs SWEEP problems (default 10000, with
+# ctest's settings: Ipopt capped at 2 CPU s, jerk-limited K at most 30; 0 skips it). Exit 1 if any
+# target or the sweep failed.
+#
+#   scripts/fuzz.sh [SECONDS] [SWEEP]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH
 seconds="${1:-60}"
+sweep="${2:-10000}"
 if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [[ "$seconds" -lt 1 ]]; then
   echo "fuzz: SECONDS must be a positive integer, got '$seconds'" >&2
+  exit 2
+fi
+if ! [[ "$sweep" =~ ^[0-9]+$ ]]; then
+  echo "fuzz: SWEEP must be a non-negative integer, got '$sweep'" >&2
   exit 2
 fi
 ./scripts/install_deps.sh fuzz
@@ -41,6 +51,10 @@ for target in "${targets[@]}"; do
   grep -E "^stat::number_of_executed_units|^#[0-9]+.*DONE" "build-fuzz/$target.log" | tail -1 || true
 done
 rm -f /tmp/timeopt_fuzz_map_*.bt
+if [[ "$sweep" -gt 0 ]]; then
+  echo "fuzz: property sweep of $sweep problems"
+  ./scripts/sweep.sh "$sweep" 1 --ipopt-seconds 2 --max-jerk-cells 30 || failed+=("property sweep")
+fi
 if [[ ${#failed[@]} -gt 0 ]]; then
   echo "fuzz: failed: ${failed[*]}" >&2
   exit 1
