@@ -7,8 +7,9 @@
 //    their grid points and cell middles, the boundary speeds, T against the profile;
 //  - an infeasible verdict must be shared by the other backend, and is false when the other one
 //    has an optimal answer that passes the checks above;
-//  - the backends agree on T (the same convex problem on the paper's and certified rows; on the
-//    jerk-limited rows Ipopt's exact rows may only be lower, and by little);
+//  - the backends agree on T (the same convex problem on the paper's and certified rows, where a
+//    disagreement is settled by Ipopt at a tighter tolerance; on the jerk-limited rows the SCP
+//    may be above Ipopt's exact rows, by little);
 //  - a second solve of every fourth problem gives the same bits.
 //
 //   timeopt_property_sweep [--first N] [--count N] [--seed S] [--ipopt-seconds S] [--max-jerk-cells K]
@@ -357,6 +358,7 @@ struct Totals {
   int slowest_index = -1;
   int known = 0;       // failing problems of the --known list
   int unresolved = 0;  // no answer (jerk-limited), or an infeasible verdict nothing confirms
+  int ipopt_loose = 0;  // paper/certified: Ipopt off, a referee (Ipopt at 1e-13 or the conic solver) agreeing
   int confirmed_by_both = 0, confirmed_by_physics = 0, ipopt_capped = 0;
 };
 
@@ -472,7 +474,7 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
       }
     }
     if (socp_ok && ipopt_ok) {
-      const double gap = (socp.total_time - ipopt.total_time) / ipopt.total_time;
+      double gap = (socp.total_time - ipopt.total_time) / ipopt.total_time;
       if (p.limits.max_jerk) {
         totals.worst_jerk_above = std::max(totals.worst_jerk_above, gap);
         totals.worst_ipopt_above = std::max(totals.worst_ipopt_above, -gap);
@@ -481,13 +483,37 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
                              std::to_string(ipopt.total_time) + " (relative " + std::to_string(gap) + ")");
         }
       } else {
-        totals.worst_convex_gap = std::max(totals.worst_convex_gap, std::abs(gap));
         if (std::abs(gap) > kConvexAgreement) {
-          char text[160];
-          std::snprintf(text, sizeof(text), "T differs: socp %.12g, ipopt %.12g (relative %.3g)", socp.total_time,
-                        ipopt.total_time, gap);
-          failures.push_back(text);
+          // A referee: Ipopt again at tolerance 1e-13. At its default 1e-10 Ipopt stops up to
+          // 2.3e-5 above the optimum on problems whose speed limit is far above what the
+          // acceleration allows (measured: our solver, the conic solver alone and Ipopt at 1e-13
+          // then agree to 1e-7).
+          // Where Ipopt stays off even so (minimum-jerk curves, whose rest ends' b is free and
+          // large: Ipopt stops short of it), the conic solver alone (without the structured path)
+          // is the second referee: an independent interior-point method on the same rows.
+          IpoptTemporalOptions tight = ipopt_options;
+          tight.tolerance = 1e-13;
+          const TemporalResult referee = MakeIpoptTemporalSolver(tight)->Solve(p);
+          SocpTemporalOptions conic_only;
+          conic_only.structured = false;
+          const TemporalResult conic = MakeSocpTemporalSolver(conic_only)->Solve(p);
+          const auto close = [&](const TemporalResult& r) {
+            return r.is_success() && std::abs(socp.total_time - r.total_time) <= kConvexAgreement * r.total_time;
+          };
+          if (close(referee) || close(conic)) {
+            ++totals.ipopt_loose;
+            gap = (socp.total_time - (close(referee) ? referee : conic).total_time) / socp.total_time;
+          } else {
+            char text[240];
+            std::snprintf(text, sizeof(text),
+                          "T differs: socp %.12g, ipopt %.12g (relative %.3g; ipopt at 1e-13: %s %.12g; conic solver alone: "
+                          "%s %.12g)",
+                          socp.total_time, ipopt.total_time, gap, ToString(referee.status), referee.total_time,
+                          ToString(conic.status), conic.total_time);
+            failures.push_back(text);
+          }
         }
+        totals.worst_convex_gap = std::max(totals.worst_convex_gap, std::abs(gap));
       }
     }
     if (index % 4 == 0) {
@@ -541,8 +567,9 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
               "ipopt above socp %.3g\n",
               totals.worst_convex_gap, totals.worst_jerk_above, totals.worst_ipopt_above);
   std::printf("infeasible verdicts confirmed by both backends %d, by a physical bound %d; Ipopt stopped at its "
-              "%.0f s cap %d times\n",
-              totals.confirmed_by_both, totals.confirmed_by_physics, settings.ipopt_seconds, totals.ipopt_capped);
+              "%.0f s cap %d times; Ipopt off by more than 1e-6 and a referee agreeing with us %d times\n",
+              totals.confirmed_by_both, totals.confirmed_by_physics, settings.ipopt_seconds, totals.ipopt_capped,
+              totals.ipopt_loose);
   for (const auto& [outcome, n] : totals.outcomes) std::printf("  %-40s %d\n", outcome.c_str(), n);
   std::printf("digest %016llx\n", static_cast<unsigned long long>(digest));
   return totals.failures == 0 ? 0 : 1;
