@@ -358,6 +358,15 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
                        ToString(next.status) + ": " + next.message;
         break;
       }
+      if (next.status == TemporalStatus::kInfeasible) {
+        // The linearized jerk rows are conservative (an inner approximation), so their having no
+        // solution at the jerk-free answer proves nothing about the problem: the property sweep
+        // found such a case that Ipopt's exact rows solve (a polyline started at speed, K = 6).
+        // Not a certificate, then, but a failure of the method, which the Ipopt fallback takes.
+        next.status = TemporalStatus::kNumericalError;
+        next.message = "the first convex approximation of the jerk rows (at the jerk-free answer) has no "
+                       "solution, which does not prove the problem infeasible (" + next.message + ")";
+      }
       return finish(next);
     }
     const double previous = history.back();

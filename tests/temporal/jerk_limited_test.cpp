@@ -18,6 +18,7 @@
 #include "../common/run_cli.h"
 #include "timeopt/core/files.h"
 #include "timeopt/curve/interpolation.h"
+#include "timeopt/io/temporal_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
@@ -307,6 +308,29 @@ TEST(JerkLimited, TheAnswerDoesNotDependOnUnitsOrOnLimitsThatCannotBind) {
     if (reference == 0.0) reference = r.total_time;
     EXPECT_NEAR(r.total_time, reference, 1e-8 * reference) << "vmax " << vmax;
   }
+}
+
+// The linearized jerk rows are an inner approximation: their having no solution at the jerk-free
+// answer is not a certificate. The property sweep found such a problem (its problem 5972: a
+// polyline of 4 pieces started at 0.4 m/s, K = 6) that the SOCP backend called infeasible while
+// Ipopt's exact rows solve it, and the answer holds every limit. Now it is a numerical failure
+// that says so, and the Ipopt fallback answers with Ipopt's own T (the same solver on the same
+// rows: 1e-12).
+TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
+  const TemporalProblem p = ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) +
+                                                    "/tests/temporal/data/jerk_linearization_infeasible.json");
+  const TemporalResult exact = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_TRUE(exact.is_success()) << exact.message;
+  EXPECT_LE(exact.max_jerk_ratio, 1.0 + 1e-6);
+  SocpTemporalOptions no_fallback;
+  no_fallback.jerk_ipopt_fallback_seconds = 0.0;
+  const TemporalResult conic = MakeSocpTemporalSolver(no_fallback)->Solve(p);
+  EXPECT_EQ(conic.status, TemporalStatus::kNumericalError) << conic.message;
+  EXPECT_THAT(conic.message, HasSubstr("does not prove the problem infeasible"));
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_TRUE(socp.is_success()) << socp.message;
+  EXPECT_EQ(socp.solver, "ipopt");
+  EXPECT_NEAR(socp.total_time, exact.total_time, 1e-12 * exact.total_time);
 }
 
 TEST(JerkLimited, BadJerkLimitsAreInvalidInputAndUnreachableAccelerationsInfeasible) {
