@@ -220,6 +220,12 @@ ConstraintMode ModeFrom(const std::string& text) {
 
 // ---- the planner ----
 
+// A memory budget in MiB (0: none) as bytes, or a ValueError.
+int64_t BudgetBytes(double max_memory_mb) {
+  if (!(max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
+  return static_cast<int64_t>(max_memory_mb * 1024 * 1024);
+}
+
 PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margin, bool* whole_map,
                                   double* max_memory_mb) {
   PlannerOptions o;
@@ -251,7 +257,6 @@ PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margi
       *whole_map = value.cast<bool>();
     } else if (key == "max_memory_mb") {
       *max_memory_mb = value.cast<double>();
-      if (!(*max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
     } else {
       throw py::type_error("plan: unknown keyword '" + key +
                            "' (expected config, max_velocity, max_acceleration, max_jerk, max_speed, "
@@ -633,9 +638,9 @@ PYBIND11_MODULE(timeopt, m) {
           [](const OccupancyMap& map, const py::object& box_min, const py::object& box_max, double max_memory_mb) {
             std::optional<Eigen::AlignedBox3d> box;
             if (!box_min.is_none() || !box_max.is_none()) box = Eigen::AlignedBox3d(Vec3(box_min, "box_min"), Vec3(box_max, "box_max"));
-            if (!(max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
+            const int64_t budget = BudgetBytes(max_memory_mb);
             py::gil_scoped_release release;
-            return Esdf::FromMap(map, box, static_cast<int64_t>(max_memory_mb * 1024 * 1024));
+            return Esdf::FromMap(map, box, budget);
           },
           py::arg("map"), py::arg("box_min") = py::none(), py::arg("box_max") = py::none(), py::arg("max_memory_mb") = 0.0,
           "The field over the map's known box, or over [box_min, box_max]. max_memory_mb > 0: a budget for its\n"
@@ -694,11 +699,11 @@ PYBIND11_MODULE(timeopt, m) {
       "plan",
       [](const py::object& map, const py::handle& start, const py::handle& goal, const py::kwargs& kwargs) {
         const Eigen::Vector3d s = Vec3(start, "start"), g = Vec3(goal, "goal");
-        double region_margin = 10.0;
+        double region_margin = kDefaultRegionMargin;
         bool whole_map = false;
         double max_memory_mb = 0.0;
         const PlannerOptions options = PlannerOptionsFrom(kwargs, &region_margin, &whole_map, &max_memory_mb);
-        const int64_t budget = static_cast<int64_t>(max_memory_mb * 1024 * 1024);
+        const int64_t budget = BudgetBytes(max_memory_mb);
         if (py::isinstance<Esdf>(map)) {
           const Esdf& esdf = map.cast<const Esdf&>();
           py::gil_scoped_release release;
@@ -708,9 +713,7 @@ PYBIND11_MODULE(timeopt, m) {
             py::isinstance<OccupancyMap>(map) ? map.cast<OccupancyMap>() : OccupancyMap::Load(map.cast<std::string>());
         if (!(region_margin >= 0.0)) throw py::value_error("region_margin: expected >= 0");
         py::gil_scoped_release release;
-        Eigen::AlignedBox3d region(s.cwiseMin(g), s.cwiseMax(g));
-        region.min().array() -= region_margin;
-        region.max().array() += region_margin;
+        const Eigen::AlignedBox3d region = PlanRegion(s, g, region_margin);
         const Esdf esdf =
             whole_map ? Esdf::FromMap(occupancy, std::nullopt, budget) : Esdf::FromMapRegion(occupancy, region, budget);
         return Plan(esdf, s, g, options);

@@ -39,11 +39,6 @@ constexpr const char* kDefaultStart = "1,1,1.5";
 constexpr const char* kDefaultGoal = "19,19,1.5";
 constexpr const char* kDefaultOutput = "results/plan.csv";
 constexpr const char* kDefaultPlot = "results/plan.png";
-// The distance field covers the box of start and goal grown by this much (metres, every axis):
-// room for the detours of a forest or a building floor, while a city-sized map costs only the
-// region. A path that needs more finds a wall there (the region's cut faces count as occupied) and
-// the plan fails as blocked; --whole-map lifts it.
-constexpr double kDefaultRegionMargin = 10.0;
 
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
@@ -110,9 +105,7 @@ int RunPlan(PlanArgs args) {
   }
   const OccupancyMap map = OccupancyMap::Load(args.map, unknown);
   auto t = Clock::now();
-  Eigen::AlignedBox3d region(start.cwiseMin(goal), start.cwiseMax(goal));
-  region.min().array() -= args.region_margin;
-  region.max().array() += args.region_margin;
+  const Eigen::AlignedBox3d region = PlanRegion(start, goal, args.region_margin);
   const int64_t budget = args.max_memory_mib * 1024 * 1024;
   const Esdf esdf =
       args.whole_map ? Esdf::FromMap(map, std::nullopt, budget) : Esdf::FromMapRegion(map, region, budget);

@@ -17,6 +17,7 @@
 #include <string>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/curve/piecewise_curve.h"
@@ -189,6 +190,19 @@ class Planner {
   std::unique_ptr<TemporalSolver> temporal_;  // made at the first Plan, remade when options.socp change
   SocpTemporalOptions temporal_options_;
 };
+
+// The region of interest of a plan on a large map (Esdf::FromMapRegion): the box of start and
+// goal grown by `margin` metres on every axis. kDefaultRegionMargin leaves room for the detours of
+// a forest or a building floor while a city-sized map costs only the region; a path that needs more
+// finds a wall there (the region's cut faces count as occupied) and the plan fails as blocked.
+inline constexpr double kDefaultRegionMargin = 10.0;
+inline Eigen::AlignedBox3d PlanRegion(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
+                                      double margin = kDefaultRegionMargin) {
+  Eigen::AlignedBox3d region(start.cwiseMin(goal), start.cwiseMax(goal));
+  region.min().array() -= margin;
+  region.max().array() += margin;
+  return region;
+}
 
 // One plan (a Planner for one call).
 PlanResult Plan(const Esdf& esdf, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
