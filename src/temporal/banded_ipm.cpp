@@ -42,15 +42,6 @@ constexpr double kInfeasibleMargin = 1e-6;
 // system is too badly conditioned for this path, and the conic solver takes over.
 constexpr double kPivotFloor = 1e-15;
 
-// One cell's time term with its grid values resolved (as IpoptTemporalNlp's CellTerms).
-struct CellTerm {
-  int var[2] = {-1, -1};
-  double scale[2] = {1.0, 1.0};
-  double fixed[2] = {0.0, 0.0};
-  double c = 0.0;    // time = c / (sqrt(b0) + sqrt(b1)): 2 ds time_weight
-  double reg = 0.0;  // rho / (4 ds): the regularization rho (b1 - b0)^2 / (4 ds)
-};
-
 // Lower band of a symmetric n x n matrix: entry (i, i - k) at band[i * (p + 1) + k], k = 0..p.
 struct Band {
   int n = 0, p = 0;
@@ -121,24 +112,57 @@ struct Band {
   }
 };
 
+// A feasible profile by reachability along the path (reachability.h), for problems whose rows are
+// over one unknown or two neighbours: the controllable sets backward, then the largest values
+// forward. False when a set comes out empty. `margin` loosens every bound: h + margin |h| (and
+// margin for h = 0).
+bool GreedyProfile(const BandedProblem& p, std::vector<double>* out, double margin) {
+  ChainRows chain(p.n);
+  for (size_t r = 0; r < p.rows.size(); ++r) {
+    const BandedRow& row = p.rows[r];
+    const double h = p.h[r] + margin * std::max(1.0, std::abs(p.h[r]));
+    if (row.count == 1) chain.Add(row.first, row.v[0], row.first, 0.0, h);
+    else chain.Add(row.first, row.v[0], row.first + 1, row.v[1], h);
+  }
+  if (!chain.CapUnbounded()) return false;
+  std::vector<double> lo, hi;
+  if (ControllableSets(chain, &lo, &hi) >= 0) return false;
+  *out = GreedyForward(chain, lo, hi, hi[0]);
+  return true;
+}
+
 class BandedIpm {
  public:
-  BandedIpm(const TemporalDiscretization& d, const BandedIpmSettings& settings) : d_(d), settings_(settings) {}
+  BandedIpm(const BandedProblem& p, const BandedIpmSettings& settings)
+      : p_(p), settings_(settings), n_(p.n), m_(static_cast<int>(p.rows.size())), rows_(p.rows), h_(p.h) {
+    // Runs of consecutive rows that start at the same unknown: their sums into the gradient, the
+    // right-hand side and the Newton matrix are formed in registers and added once per run (adding
+    // each row's terms in memory stalled on store-to-load forwarding).
+    for (int r = 0; r < m_; ++r) {
+      const BandedRow& row = rows_[static_cast<size_t>(r)];
+      if (runs_.empty() || runs_.back().first != row.first) runs_.push_back(RowRun{r, r, row.first, 0});
+      RowRun& run = runs_.back();
+      run.end = r + 1;
+      run.span = std::max<int>(run.span, row.count);
+    }
+  }
 
-  BandedIpmOutcome Run() {
+  BandedIpmOutcome Run(const std::vector<double>& y0) {
     BandedIpmOutcome out;
-    if (!Setup(&out.message)) {
-      if (infeasible_) out.kind = BandedIpmOutcome::Kind::kInfeasible;
+    out.kind = BandedIpmOutcome::Kind::kGaveUp;
+    out.rows = m_ - n_;
+    if (!Start(y0)) {
+      out.message = "structured path: no start inside the rows that keep b positive";
       return out;
     }
-    out.kind = BandedIpmOutcome::Kind::kGaveUp;
-    Start();
     for (int it = 0;; ++it) {
       out.iterations = it;
       Evaluate();
       if (Converged()) {
         out.kind = BandedIpmOutcome::Kind::kOptimal;
-        out.x = x_;
+        out.x.resize(p_.x_form.size());
+        for (size_t v = 0; v < out.x.size(); ++v) out.x[v] = p_.x_form[v].Value(x_);
+        out.y = x_;
         return out;
       }
       if (it >= settings_.max_iterations) {
@@ -153,214 +177,119 @@ class BandedIpm {
   }
 
  private:
-  // A row v0 x_c0 + v1 x_c1 <= h over one value (v1 = 0, c1 = c0) or two neighbouring ones
-  // (c1 = c0 + 1), scaled so that h is +-1 or 0.
-  struct Row {
-    int c0 = 0, c1 = 0;
-    double v0 = 0.0, v1 = 0.0;
-  };
-
-  // The rows, the cells and the bandwidth; false (not applicable) with a reason.
-  bool Setup(std::string* why) {
-    n_ = d_.num_vars;
-    if (n_ <= 0) {
-      *why = "no free values";
-      return false;
-    }
-    if (!d_.cone_rows.empty() || !d_.cubic_rows.empty()) {
-      *why = "cone or cubic rows";
-      return false;
-    }
-    rows_.clear();
-    h_.clear();
-    bool two_neighbours = true;
-    const auto add_row = [&](const std::vector<std::pair<int, double>>& terms, double sign, double bound) {
-      double scale = std::abs(bound);
-      if (!(scale > 0.0)) {
-        for (const auto& t : terms) scale = std::max(scale, std::abs(t.second));
-      }
-      if (!(scale > 0.0)) scale = 1.0;
-      Row row;
-      if (terms.size() == 1) {
-        row.c0 = row.c1 = terms[0].first;
-        row.v0 = sign * terms[0].second / scale;
-      } else if (terms.size() == 2 && std::abs(terms[0].first - terms[1].first) == 1) {
-        const bool ordered = terms[0].first < terms[1].first;
-        const auto& first = ordered ? terms[0] : terms[1];
-        const auto& second = ordered ? terms[1] : terms[0];
-        row.c0 = first.first;
-        row.c1 = second.first;
-        row.v0 = sign * first.second / scale;
-        row.v1 = sign * second.second / scale;
-      } else {
-        two_neighbours = false;
-        return;
-      }
-      rows_.push_back(row);
-      h_.push_back(sign * bound / scale);
-    };
-    // Bound rows first: row v is -x_v <= 0 (the start keeps their residual at 0).
-    std::vector<std::pair<int, double>> single(1);
-    for (int v = 0; v < n_; ++v) {
-      single[0] = {v, 1.0};
-      add_row(single, -1.0, 0.0);
-    }
-    for (const LinearRow& r : d_.rows) {
-      if (r.lower == r.upper) {
-        *why = "equality rows";
-        return false;
-      }
-      if (std::isfinite(r.upper)) add_row(r.terms, 1.0, r.upper);
-      if (std::isfinite(r.lower)) add_row(r.terms, -1.0, r.lower);
-    }
-    for (int v = 0; v < n_; ++v) {
-      single[0] = {v, 1.0};
-      if (std::isfinite(d_.var_upper[static_cast<size_t>(v)])) add_row(single, 1.0, d_.var_upper[static_cast<size_t>(v)]);
-    }
-    // Without the reachability start (which needs these rows) the method took 37-75 iterations
-    // where the conic solver takes 15-26 (lambda_a's rows over three values), so it stops here.
-    if (!two_neighbours) {
-      *why = "a row over more than two neighbouring values";
-      return false;
-    }
-    m_ = static_cast<int>(h_.size());
-    cells_.clear();
-    int p = 1;
-    for (const Cell& cell : d_.cells) {
-      CellTerm c;
-      for (int j = 0; j < 2; ++j) {
-        const GridValue& g = d_.grid[static_cast<size_t>(cell.first_grid + j)];
-        c.var[j] = g.var;
-        c.scale[j] = g.scale;
-        c.fixed[j] = g.fixed;
-      }
-      if (c.var[0] < 0 && c.var[1] < 0 && !(c.fixed[0] + c.fixed[1] > 0.0)) {
-        *why = "a cell whose speed is fixed at 0 at both ends";
-        return false;
-      }
-      c.c = 2.0 * cell.ds * cell.time_weight;
-      c.reg = d_.rho / (4.0 * cell.ds);
-      if (c.var[0] >= 0 && c.var[1] >= 0) p = std::max(p, std::abs(c.var[0] - c.var[1]));
-      cells_.push_back(c);
-    }
-    if (p > settings_.max_bandwidth) {
-      *why = "half-bandwidth " + std::to_string(p);
-      return false;
-    }
-    p_ = p;
-    if (!GreedyProfile(&greedy_, 0.0)) {
-      std::vector<double> unused;
-      infeasible_ = !GreedyProfile(&unused, kInfeasibleMargin);
-      *why = infeasible_ ? "no time allocation satisfies the limits: reachability along the path finds no "
-                           "profile (structured path)"
-                         : "the reachability pass found no profile";
-      return false;
-    }
-    return true;
-  }
-
-  double RowValue(const Row& row, const std::vector<double>& x) const {
-    return row.v0 * x[static_cast<size_t>(row.c0)] + row.v1 * x[static_cast<size_t>(row.c1)];
-  }
-
-  // x0: kGreedyWeight times the reachability profile plus the rest times min(var_upper, cap)
+  // x0: kGreedyWeight times y0 plus the rest times a uniform profile (each unknown at its cap)
   // scaled by half of the largest t in (0, 1] that keeps every row holding at 0 satisfied at t x0
   // (as IpoptTemporalNlp::StartingPoint); s from the rows (at least kSlackFloor, which leaves a
-  // residual on rows the start violates); z = mu0 / s.
-  void Start() {
-    double cap = 0.0;
-    for (double u : d_.var_upper) {
-      if (std::isfinite(u)) cap = std::max(cap, u);
-    }
-    if (!(cap > 0.0)) cap = 1.0;
-    x_.assign(static_cast<size_t>(n_), 0.0);
-    for (int v = 0; v < n_; ++v) x_[static_cast<size_t>(v)] = std::min(d_.var_upper[static_cast<size_t>(v)], cap);
+  // residual on rows the start violates); z = mu0 / s. False when the bound rows are not strictly
+  // inside at x0 or J is not finite there.
+  bool Start(const std::vector<double>& y0) {
+    x_ = p_.cap;
     double t_max = 1.0;
     for (int r = n_; r < m_; ++r) {
       if (!(h_[static_cast<size_t>(r)] > 0.0)) continue;
-      const double value = RowValue(rows_[static_cast<size_t>(r)], x_);
+      const double value = rows_[static_cast<size_t>(r)].Value(x_);
       if (value > h_[static_cast<size_t>(r)]) t_max = std::min(t_max, h_[static_cast<size_t>(r)] / value);
     }
+    const bool guess = y0.size() == static_cast<size_t>(n_);
+    const double weight = guess ? kGreedyWeight : 0.0;
     for (int v = 0; v < n_; ++v) {
-      x_[static_cast<size_t>(v)] = kGreedyWeight * greedy_[static_cast<size_t>(v)] +
-                                   (1.0 - kGreedyWeight) * 0.5 * t_max * x_[static_cast<size_t>(v)];
+      x_[static_cast<size_t>(v)] = (1.0 - weight) * 0.5 * t_max * x_[static_cast<size_t>(v)] +
+                                   (guess ? weight * std::max(0.0, y0[static_cast<size_t>(v)]) : 0.0);
+      if (!(x_[static_cast<size_t>(v)] > 0.0)) return false;
     }
     s_.assign(static_cast<size_t>(m_), 0.0);
     z_.assign(static_cast<size_t>(m_), 0.0);
     constexpr double kSlackFloor = 1e-2;
     for (int r = 0; r < m_; ++r) {
-      const double slack = h_[static_cast<size_t>(r)] - RowValue(rows_[static_cast<size_t>(r)], x_);
+      const double slack = h_[static_cast<size_t>(r)] - rows_[static_cast<size_t>(r)].Value(x_);
       s_[static_cast<size_t>(r)] = r < n_ ? x_[static_cast<size_t>(r)] : std::max(slack, kSlackFloor);
     }
     // z = mu0 / s with s'z = kStartGap J(x0).
     Evaluate();
+    if (!std::isfinite(objective_)) return false;
     const double mu0 = std::max(kStartGap * std::abs(objective_) / m_, std::numeric_limits<double>::min());
     for (int r = 0; r < m_; ++r) z_[static_cast<size_t>(r)] = mu0 / s_[static_cast<size_t>(r)];
-  }
-
-  // A feasible profile by reachability along the path (reachability.h): the controllable sets
-  // backward, then the largest values forward. False when a set comes out empty.
-  // `margin` loosens every bound: h + margin |h| (and margin for h = 0).
-  bool GreedyProfile(std::vector<double>* out, double margin) const {
-    ChainRows chain(n_);
-    for (size_t r = 0; r < rows_.size(); ++r) {
-      const Row& row = rows_[r];
-      const double h = h_[r] + margin * std::max(1.0, std::abs(h_[r]));
-      chain.Add(row.c0, row.v0, row.c1, row.v1, h);  // two-value rows are neighbours (Setup)
-    }
-    if (!chain.CapUnbounded()) return false;
-    std::vector<double> lo, hi;
-    if (ControllableSets(chain, &lo, &hi) >= 0) return false;
-    *out = GreedyForward(chain, lo, hi, hi[0]);
     return true;
-  }
-
-  double B(const CellTerm& c, int j, const std::vector<double>& x) const {
-    return c.var[j] < 0 ? c.fixed[j] : c.scale[j] * x[static_cast<size_t>(c.var[j])];
   }
 
   // J, its gradient and (into hess_) its Hessian at x_; the residuals r_d and r_p.
   void Evaluate() {
     grad_.assign(static_cast<size_t>(n_), 0.0);
-    hess_.Reset(n_, p_);
+    hess_.Reset(n_, p_.bandwidth);
     objective_ = 0.0;
-    for (const CellTerm& c : cells_) {
-      const double b0 = std::max(B(c, 0, x_), 0.0), b1 = std::max(B(c, 1, x_), 0.0);
+    for (const BandedCell& c : p_.cells) {
+      const double b0 = std::max(c.b[0].Value(x_), 0.0), b1 = std::max(c.b[1].Value(x_), 0.0);
       const double r0 = std::sqrt(b0), r1 = std::sqrt(b1);
       const double S = r0 + r1;
       objective_ += c.c / S + c.reg * (b1 - b0) * (b1 - b0);
       const double half = 0.5 * c.c;
       const double reg_grad = 2.0 * c.reg * (b1 - b0);
+      // Derivatives in b0, b1; a constant b has none.
+      const bool free0 = c.b[0].count > 0, free1 = c.b[1].count > 0;
       double db[2] = {-reg_grad, reg_grad};
       double h00 = 2.0 * c.reg, h11 = 2.0 * c.reg, h01 = -2.0 * c.reg;
       const double S2 = S * S;
-      if (c.var[0] >= 0) {
+      if (free0) {
         db[0] += -half / (S2 * r0);
         h00 += half / (S2 * b0) * (1.0 / S + 0.5 / r0);
       }
-      if (c.var[1] >= 0) {
+      if (free1) {
         db[1] += -half / (S2 * r1);
         h11 += half / (S2 * b1) * (1.0 / S + 0.5 / r1);
       }
-      if (c.var[0] >= 0 && c.var[1] >= 0) h01 += half / (S2 * S * r0 * r1);
-      for (int j = 0; j < 2; ++j) {
-        if (c.var[j] >= 0) grad_[static_cast<size_t>(c.var[j])] += c.scale[j] * db[j];
+      if (free0 && free1) h01 += half / (S2 * S * r0 * r1);
+      if (!p_.controls) {
+        // One unknown per value (the paper's and certified rows): the terms directly.
+        const double s0 = c.b[0].coef[0], s1 = c.b[1].coef[0];
+        const int v0 = c.b[0].first, v1 = c.b[1].first;
+        if (free0) {
+          grad_[static_cast<size_t>(v0)] += s0 * db[0];
+          hess_.Add(v0, v0, s0 * s0 * h00);
+        }
+        if (free1) {
+          grad_[static_cast<size_t>(v1)] += s1 * db[1];
+          hess_.Add(v1, v1, s1 * s1 * h11);
+        }
+        if (free0 && free1) {
+          const double cross = s0 * s1 * h01;
+          if (v0 == v1) hess_.Add(v0, v0, 2.0 * cross);
+          else hess_.Add(v0, v1, cross);
+        }
+        continue;
       }
-      if (c.var[0] >= 0) hess_.Add(c.var[0], c.var[0], c.scale[0] * c.scale[0] * h00);
-      if (c.var[1] >= 0) hess_.Add(c.var[1], c.var[1], c.scale[1] * c.scale[1] * h11);
-      if (c.var[0] >= 0 && c.var[1] >= 0) {
-        const double cross = c.scale[0] * c.scale[1] * h01;
-        if (c.var[0] == c.var[1]) hess_.Add(c.var[0], c.var[0], 2.0 * cross);
-        else hess_.Add(c.var[0], c.var[1], cross);
+      // The two forms on one window of unknowns: grad += db_j c_j, hess += sum_jk h_jk c_j c_k'.
+      int lo = n_, hi = -1;
+      for (const ControlForm& f : c.b) {
+        if (f.count == 0) continue;
+        lo = std::min(lo, f.first);
+        hi = std::max(hi, f.first + f.count - 1);
+      }
+      if (hi < lo) continue;
+      const int w = hi - lo + 1;
+      double cv[2][2 * kMaxRowSpan] = {};
+      for (int j = 0; j < 2; ++j) {
+        const ControlForm& f = c.b[j];
+        for (int t = 0; t < f.count; ++t) cv[j][f.first - lo + t] = f.coef[static_cast<size_t>(t)];
+      }
+      for (int a = 0; a < w; ++a) {
+        grad_[static_cast<size_t>(lo + a)] += db[0] * cv[0][a] + db[1] * cv[1][a];
+        for (int b = 0; b <= a; ++b) {
+          const double hab = h00 * cv[0][a] * cv[0][b] + h11 * cv[1][a] * cv[1][b] +
+                             h01 * (cv[0][a] * cv[1][b] + cv[1][a] * cv[0][b]);
+          hess_.At(lo + a, lo + b) += hab;
+        }
       }
     }
     rd_ = grad_;
     rp_.resize(static_cast<size_t>(m_));
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const Row& row = rows_[r];
-      rd_[static_cast<size_t>(row.c0)] += row.v0 * z_[r];
-      rd_[static_cast<size_t>(row.c1)] += row.v1 * z_[r];
-      rp_[r] = RowValue(row, x_) + s_[r] - h_[r];
+    for (const RowRun& run : runs_) {
+      double acc[kMaxRowSpan] = {};
+      for (int r = run.begin; r < run.end; ++r) {
+        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        for (int t = 0; t < row.count; ++t) acc[t] += row.v[t] * z_[static_cast<size_t>(r)];
+        rp_[static_cast<size_t>(r)] = row.Value(x_) + s_[static_cast<size_t>(r)] - h_[static_cast<size_t>(r)];
+      }
+      for (int t = 0; t < run.span; ++t) rd_[static_cast<size_t>(run.first + t)] += acc[t];
     }
   }
 
@@ -384,26 +313,30 @@ class BandedIpm {
   double Direction(const std::vector<double>& rc) {
     dx_.resize(static_cast<size_t>(n_));
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const Row& row = rows_[r];
-      const double t = (rc[r] - z_[r] * rp_[r]) * inv_s_[r];
-      dx_[static_cast<size_t>(row.c0)] += row.v0 * t;
-      dx_[static_cast<size_t>(row.c1)] += row.v1 * t;
+    for (const RowRun& run : runs_) {
+      double acc[kMaxRowSpan] = {};
+      for (int r = run.begin; r < run.end; ++r) {
+        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        const size_t i = static_cast<size_t>(r);
+        const double t = (rc[i] - z_[i] * rp_[i]) * inv_s_[i];
+        for (int k = 0; k < row.count; ++k) acc[k] += row.v[k] * t;
+      }
+      for (int k = 0; k < run.span; ++k) dx_[static_cast<size_t>(run.first + k)] += acc[k];
     }
     factor_.Solve(dx_);
     ds_.resize(static_cast<size_t>(m_));
     dz_.resize(static_cast<size_t>(m_));
-    double alpha = kInf;
+    // The largest step as 1 / max(-ds / s, -dz / z) (multiplications, not a division per row).
+    double inverse = 0.0;
     for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const double gdx = RowValue(rows_[r], dx_);
+      const double gdx = rows_[r].Value(dx_);
       const double ds = -rp_[r] - gdx;
       const double dz = (z_[r] * (rp_[r] + gdx) - rc[r]) * inv_s_[r];
       ds_[r] = ds;
       dz_[r] = dz;
-      if (ds < 0.0) alpha = std::min(alpha, -s_[r] / ds);
-      if (dz < 0.0) alpha = std::min(alpha, -z_[r] / dz);
+      inverse = std::max(inverse, std::max(-ds * inv_s_[r], -dz * inv_z_[r]));
     }
-    return alpha;
+    return inverse > 0.0 ? 1.0 / inverse : kInf;
   }
 
   bool Step() {
@@ -411,15 +344,25 @@ class BandedIpm {
     factor_ = hess_;
     double mu = 0.0;
     inv_s_.resize(static_cast<size_t>(m_));
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const Row& row = rows_[r];
-      inv_s_[r] = 1.0 / s_[r];
-      const double w = z_[r] * inv_s_[r];
-      mu += s_[r] * z_[r];
-      factor_.At(row.c0, row.c0) += w * row.v0 * row.v0;
-      if (row.v1 != 0.0) {
-        factor_.At(row.c1, row.c1) += w * row.v1 * row.v1;
-        factor_.At(row.c1, row.c0) += w * row.v0 * row.v1;
+    inv_z_.resize(static_cast<size_t>(m_));
+    for (const RowRun& run : runs_) {
+      double block[kMaxRowSpan][kMaxRowSpan] = {};  // lower triangle
+      for (int r = run.begin; r < run.end; ++r) {
+        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        const size_t i = static_cast<size_t>(r);
+        inv_s_[i] = 1.0 / s_[i];
+        inv_z_[i] = 1.0 / z_[i];
+        const double w = z_[i] * inv_s_[i];
+        mu += s_[i] * z_[i];
+        for (int a = 0; a < row.count; ++a) {
+          const double wa = w * row.v[a];
+          for (int b = 0; b <= a; ++b) block[a][b] += wa * row.v[b];
+        }
+      }
+      for (int a = 0; a < run.span; ++a) {
+        for (int b = 0; b <= a; ++b) {
+          if (block[a][b] != 0.0) factor_.At(run.first + a, run.first + b) += block[a][b];
+        }
       }
     }
     mu /= m_;
@@ -451,24 +394,309 @@ class BandedIpm {
     return true;
   }
 
-  const TemporalDiscretization& d_;
+  struct RowRun {
+    int begin = 0, end = 0;  // rows [begin, end)
+    int first = 0;           // their first unknown
+    int span = 0;            // the most unknowns one of them touches
+  };
+
+  const BandedProblem& p_;
   BandedIpmSettings settings_;
-  int n_ = 0, m_ = 0, p_ = 0;
-  std::vector<Row> rows_;
-  std::vector<double> h_;
-  std::vector<CellTerm> cells_;
-  std::vector<double> greedy_;  // the reachability profile (GreedyProfile)
-  bool infeasible_ = false;     // no profile even with the bounds loosened (kInfeasibleMargin)
+  std::vector<RowRun> runs_;
+  int n_ = 0, m_ = 0;
+  const std::vector<BandedRow>& rows_;
+  const std::vector<double>& h_;
   std::vector<double> x_, s_, z_;
-  std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_;
+  std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_, inv_z_;
   double objective_ = 0.0;
   Band hess_, factor_;
 };
 
 }  // namespace
 
+bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool is_essential) {
+  BandedRow row;
+  row.kind = static_cast<short>(kind);
+  double constant = 0.0;
+  int lo = n, hi = -1;
+  for (const auto& [var, coef] : terms) {
+    const ControlForm& f = x_form[static_cast<size_t>(var)];
+    constant += coef * f.constant;
+    if (f.count > 0) {
+      lo = std::min(lo, f.first);
+      hi = std::max(hi, f.first + f.count - 1);
+    }
+  }
+  if (hi < lo) return sign * constant <= sign * bound + 1e-9 * std::max(1.0, std::abs(bound));
+  if (hi - lo + 1 > kMaxRowSpan) return false;
+  row.first = lo;
+  row.count = static_cast<short>(hi - lo + 1);
+  for (const auto& [var, coef] : terms) {
+    const ControlForm& f = x_form[static_cast<size_t>(var)];
+    for (int t = 0; t < f.count; ++t) row.v[f.first + t - lo] += coef * f.coef[static_cast<size_t>(t)];
+  }
+  bound -= constant;
+  double scale = std::abs(bound);
+  if (!(scale > 0.0)) {
+    for (int t = 0; t < row.count; ++t) scale = std::max(scale, std::abs(row.v[t]));
+  }
+  if (!(scale > 0.0)) scale = 1.0;
+  for (int t = 0; t < row.count; ++t) row.v[t] *= sign / scale;
+  rows.push_back(row);
+  h.push_back(sign * bound / scale);
+  essential.push_back(is_essential || !(h.back() > 0.0) ? 1 : 0);
+  return true;
+}
+
+bool BandedProblem::AddGridRow(const int* grid, const double* coef, int count, double bound) {
+  BandedRow row;
+  row.kind = static_cast<short>(LinearRow::Kind::kJerk);
+  int lo = n, hi = -1;
+  for (int j = 0; j < count; ++j) {
+    const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
+    bound -= coef[j] * f.constant;
+    if (f.count > 0 && coef[j] != 0.0) {
+      lo = std::min(lo, f.first);
+      hi = std::max(hi, f.first + f.count - 1);
+    }
+  }
+  if (hi < lo) return bound >= -1e-9;
+  if (hi - lo + 1 > kMaxRowSpan) return false;
+  row.first = lo;
+  row.count = static_cast<short>(hi - lo + 1);
+  for (int j = 0; j < count; ++j) {
+    const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
+    if (coef[j] == 0.0) continue;
+    for (int t = 0; t < f.count; ++t) row.v[f.first + t - lo] += coef[j] * f.coef[static_cast<size_t>(t)];
+  }
+  double scale = std::abs(bound);
+  if (!(scale > 0.0)) {
+    for (int t = 0; t < row.count; ++t) scale = std::max(scale, std::abs(row.v[t]));
+  }
+  if (!(scale > 0.0)) scale = 1.0;
+  for (int t = 0; t < row.count; ++t) row.v[t] /= scale;
+  rows.push_back(row);
+  h.push_back(bound / scale);
+  essential.push_back(!(h.back() > 0.0) ? 1 : 0);
+  return true;
+}
+
+void BandedProblem::PruneDominatedRows(size_t from) {
+  // Rows are compared within runs of the same window (a cell's rows come together), against the
+  // ones kept so far in the run.
+  const auto dominated = [](const BandedRow& a, const BandedRow& b) {  // a <= b componentwise
+    for (int t = 0; t < a.count; ++t) {
+      if (a.v[t] > b.v[t]) return false;
+    }
+    return true;
+  };
+  std::vector<char> keep(rows.size(), 1);
+  std::vector<size_t> window;  // kept rows of the current run with h = 1
+  for (size_t r = from; r < rows.size(); ++r) {
+    const BandedRow& row = rows[r];
+    if (h[r] != 1.0) continue;
+    if (!window.empty() && (rows[window[0]].first != row.first || rows[window[0]].count != row.count)) window.clear();
+    // An essential row is never dropped (a working set keeps it), but it may imply others.
+    bool skip = false;
+    for (size_t k : window) {
+      if (!essential[r] && dominated(row, rows[k])) {
+        skip = true;
+        break;
+      }
+    }
+    if (skip) {
+      keep[r] = 0;
+      continue;
+    }
+    size_t out = 0;
+    for (size_t k : window) {
+      if (!essential[k] && dominated(rows[k], row)) keep[k] = 0;
+      else window[out++] = k;
+    }
+    window.resize(out);
+    window.push_back(r);
+  }
+  KeepRows(keep);
+}
+
+void BandedProblem::KeepRows(const std::vector<char>& keep) {
+  size_t out = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (!keep[r] && r >= static_cast<size_t>(n)) continue;
+    rows[out] = rows[r];
+    h[out] = h[r];
+    essential[out] = essential[r];
+    ++out;
+  }
+  rows.resize(out);
+  h.resize(out);
+  essential.resize(out);
+}
+
+bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why) {
+  BandedProblem& p = *out;
+  p = BandedProblem();
+  p.controls = d.controls.has_value();
+  p.n = p.controls ? d.controls->num_controls : d.num_vars;
+  if (p.n <= 0 || d.num_vars <= 0) {
+    *why = "no free values";
+    return false;
+  }
+  if (!d.cone_rows.empty() || !d.cubic_rows.empty()) {
+    *why = "cone or cubic rows";
+    return false;
+  }
+  // b at every grid value and x at every free value, as forms in the unknowns.
+  p.grid_form.resize(d.grid.size());
+  p.x_form.assign(static_cast<size_t>(d.num_vars), ControlForm());
+  std::vector<char> x_set(static_cast<size_t>(d.num_vars), 0);
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    ControlForm f;
+    if (p.controls) {
+      f = d.controls->grid[g];
+    } else if (v.var >= 0) {
+      f.first = v.var;
+      f.count = 1;
+      f.coef[0] = v.scale;
+    } else {
+      f.constant = v.fixed;
+    }
+    p.grid_form[g] = f;
+    if (v.var >= 0 && !x_set[static_cast<size_t>(v.var)]) {
+      x_set[static_cast<size_t>(v.var)] = 1;
+      ControlForm& x = p.x_form[static_cast<size_t>(v.var)];
+      x = f;
+      x.constant /= v.scale;
+      for (int t = 0; t < x.count; ++t) x.coef[static_cast<size_t>(t)] /= v.scale;
+    }
+  }
+  // Each unknown's cap for the start: the upper bound of its free value (of its cell's middle for a
+  // control value), or the largest finite one.
+  double cap = 0.0;
+  for (double u : d.var_upper) {
+    if (std::isfinite(u)) cap = std::max(cap, u);
+  }
+  if (!(cap > 0.0)) cap = 1.0;
+  p.cap.assign(static_cast<size_t>(p.n), cap);
+  for (int v = 0; v < p.n; ++v) {
+    const int var = p.controls ? d.grid[static_cast<size_t>(d.controls->middle[static_cast<size_t>(v)])].var : v;
+    if (var >= 0) p.cap[static_cast<size_t>(v)] = std::min(d.var_upper[static_cast<size_t>(var)], cap);
+  }
+  // Bound rows first: row v is -y_v <= 0 (the start keeps their residual at 0).
+  for (int v = 0; v < p.n; ++v) {
+    BandedRow row;
+    row.first = v;
+    row.count = 1;
+    row.v[0] = -1.0;
+    p.rows.push_back(row);
+    p.h.push_back(0.0);
+    p.essential.push_back(1);
+  }
+  bool fits = true;
+  std::vector<std::pair<int, double>> single(1);
+  if (p.controls) {
+    // x >= 0 where the forms' signs do not already imply it.
+    for (int v = 0; v < d.num_vars; ++v) {
+      const ControlForm& f = p.x_form[static_cast<size_t>(v)];
+      bool implied = f.constant >= 0.0;
+      for (int t = 0; t < f.count; ++t) implied = implied && f.coef[static_cast<size_t>(t)] >= 0.0;
+      single[0] = {v, 1.0};
+      if (!implied) fits = p.AddRow(single, -1.0, 0.0) && fits;
+    }
+  }
+  for (const LinearRow& r : d.rows) {
+    if (r.lower == r.upper) {
+      // The control values satisfy every equality row by construction (checked when d.controls
+      // was built); the free values do not.
+      if (p.controls) continue;
+      *why = "equality rows";
+      return false;
+    }
+    p.kind = static_cast<int>(r.kind);
+    if (std::isfinite(r.upper)) fits = p.AddRow(r.terms, 1.0, r.upper) && fits;
+    if (std::isfinite(r.lower)) fits = p.AddRow(r.terms, -1.0, r.lower) && fits;
+    p.kind = -1;
+  }
+  for (int v = 0; v < d.num_vars; ++v) {
+    single[0] = {v, 1.0};
+    if (std::isfinite(d.var_upper[static_cast<size_t>(v)])) fits = p.AddRow(single, 1.0, d.var_upper[static_cast<size_t>(v)], true) && fits;
+  }
+  if (!fits) {
+    *why = "a row over more than four unknowns, or a constant row violated";
+    return false;
+  }
+  if (p.controls) {
+    p.PruneDominatedRows(static_cast<size_t>(p.n));
+  } else {
+    // Without the reachability start (which needs these rows) the method took 37-75 iterations
+    // where the conic solver takes 15-26 (lambda_a's rows over three values), so it stops here.
+    for (const BandedRow& row : p.rows) {
+      if (row.count > 2) {
+        *why = "a row over more than two neighbouring values";
+        return false;
+      }
+    }
+  }
+  int bandwidth = 1;
+  for (const BandedRow& row : p.rows) bandwidth = std::max(bandwidth, row.count - 1);
+  for (const Cell& cell : d.cells) {
+    BandedCell c;
+    for (int j = 0; j < 2; ++j) c.b[j] = p.grid_form[static_cast<size_t>(cell.first_grid + j)];
+    if (c.b[0].count == 0 && c.b[1].count == 0 && !(c.b[0].constant + c.b[1].constant > 0.0)) {
+      *why = "a cell whose speed is fixed at 0 at both ends";
+      return false;
+    }
+    c.c = 2.0 * cell.ds * cell.time_weight;
+    c.reg = d.rho / (4.0 * cell.ds);
+    int lo = p.n, hi = -1;
+    for (const ControlForm& f : c.b) {
+      if (f.count == 0) continue;
+      lo = std::min(lo, f.first);
+      hi = std::max(hi, f.first + f.count - 1);
+    }
+    if (hi >= lo) bandwidth = std::max(bandwidth, hi - lo);
+    p.cells.push_back(c);
+  }
+  p.bandwidth = bandwidth;
+  return true;
+}
+
+BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
+                                    const BandedIpmSettings& settings) {
+  if (p.bandwidth > settings.max_bandwidth) {
+    BandedIpmOutcome out;
+    out.message = "half-bandwidth " + std::to_string(p.bandwidth);
+    return out;
+  }
+  return BandedIpm(p, settings).Run(y0);
+}
+
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings) {
-  return BandedIpm(d, settings).Run();
+  BandedIpmOutcome out;
+  BandedProblem p;
+  if (!BuildBandedProblem(d, &p, &out.message)) return out;
+  std::vector<double> y0;
+  if (!p.controls) {
+    if (!GreedyProfile(p, &y0, 0.0)) {
+      std::vector<double> unused;
+      const bool infeasible = !GreedyProfile(p, &unused, kInfeasibleMargin);
+      if (infeasible) out.kind = BandedIpmOutcome::Kind::kInfeasible;
+      out.message = infeasible ? "no time allocation satisfies the limits: reachability along the path finds no "
+                                 "profile (structured path)"
+                               : "the reachability pass found no profile";
+      return out;
+    }
+  } else if (d.start_b.size() == d.grid.size()) {
+    // The control values of d.start_b: P1 = (4 b_mid - b_start - b_end) / 2 of each one's cell.
+    y0.resize(static_cast<size_t>(p.n));
+    for (int v = 0; v < p.n; ++v) {
+      const size_t g = static_cast<size_t>(d.controls->middle[static_cast<size_t>(v)]);
+      const double p1 = 0.5 * (4.0 * d.start_b[g] - d.start_b[g - 1] - d.start_b[g + 1]);
+      y0[static_cast<size_t>(v)] = p1 / d.controls->scale[static_cast<size_t>(v)];
+    }
+  }
+  return SolveBandedProblem(p, y0, settings);
 }
 
 }  // namespace timeopt::internal

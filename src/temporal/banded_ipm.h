@@ -52,10 +52,68 @@ struct BandedIpmOutcome {
   };
   Kind kind = Kind::kNotApplicable;
   int iterations = 0;
+  int rows = 0;  // inequality rows it solved with, but the unknowns' bounds
   std::string message;
   std::vector<double> x;  // d.num_vars values when optimal
+  std::vector<double> y;  // the unknowns when optimal
 };
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings);
+
+// The problem in the structured path's own terms, for callers that solve a family of problems
+// with the same unknowns (the jerk-limited sequential convex programme): unknowns y (the free
+// values, or d.controls' control values), rows G y <= h over at most kMaxRowSpan consecutive
+// unknowns and scaled so that h is +-1 or 0, the first n of them the bounds -y <= 0, and the
+// cells' time terms with b as forms in y.
+inline constexpr int kMaxRowSpan = ControlForm::kMaxTerms;
+struct BandedRow {
+  int first = 0;
+  short count = 0;
+  short kind = -1;  // the LinearRow::Kind it came from (-1: a bound of the unknowns)
+  double v[kMaxRowSpan] = {};
+  double Value(const std::vector<double>& y) const {
+    double value = 0.0;
+    for (int t = 0; t < count; ++t) value += v[t] * y[static_cast<size_t>(first + t)];
+    return value;
+  }
+};
+struct BandedCell {
+  ControlForm b[2];
+  double c = 0.0;    // time = c / (sqrt(b0) + sqrt(b1)): 2 ds time_weight
+  double reg = 0.0;  // rho / (4 ds): the regularization rho (b1 - b0)^2 / (4 ds)
+};
+struct BandedProblem {
+  int n = 0;
+  int bandwidth = 1;
+  bool controls = false;              // y are control values (else the free values themselves)
+  std::vector<BandedRow> rows;
+  std::vector<double> h;
+  std::vector<BandedCell> cells;
+  std::vector<ControlForm> grid_form;  // b at every grid value
+  std::vector<ControlForm> x_form;     // every free value of d
+  std::vector<double> cap;            // per unknown: a size for the uniform part of the start
+  // Per row: 1 for the rows a working set always keeps (the bounds -y <= 0 and x <= var_upper,
+  // rows with h <= 0), which keep every unknown bounded whatever else is left out.
+  std::vector<char> essential;
+  int kind = -1;  // the kind AddRow gives its rows
+  // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
+  // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
+  bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
+  // Appends the row sum_j coef[j] b_{grid[j]} <= bound over `count` grid values; as AddRow.
+  bool AddGridRow(const int* grid, const double* coef, int count, double bound);
+  // Drops the rows (from `from` on) that another row over the same unknowns implies: with h = 1
+  // both and y >= 0, v . y <= w . y <= 1 when v <= w componentwise.
+  void PruneDominatedRows(size_t from);
+  // Keeps only the rows whose flag is set (the first n always), in order.
+  void KeepRows(const std::vector<char>& keep);
+};
+
+// The structured problem of d (rows, cells and forms); false (not applicable) with a reason.
+bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why);
+
+// Solves p from y0 (weighted with a uniform profile inside the rows that hold at 0; empty: that
+// profile alone). On kOptimal, x holds d's free values (through x_form) and y the unknowns.
+BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
+                                    const BandedIpmSettings& settings);
 
 }  // namespace timeopt::internal

@@ -6,9 +6,11 @@
 // the bounds, and the stages both discretizations run.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -198,5 +200,33 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
                                   const std::vector<Eigen::Vector3d>& coef,
                                   const std::function<std::string()>& where, RowBuilder& row,
                                   TemporalDiscretization* d);
+
+// A linearized jerk row of a regular cell before its linearization point bbar is known (the
+// sequential convex programme's rows, see jerk_discretization.cpp): the row is
+//   sum_j (a[j] 2 sqrt(bbar) / (3 jmax) + basis[j] / (3 bbar)) b_{g0 + j} <= 1
+// over the cell's three half-grid values, with bbar = LinearizationPoint of the cell.
+struct JerkRowTemplate {
+  int g0 = 0;
+  double jmax = 0.0;
+  std::array<double, 3> a{};
+  std::array<double, 3> basis{};
+};
+// The jerk-limited discretization without the jerk rows of regular cells (JerkRows::kNone), and
+// those rows as templates (one per Bernstein coefficient, axis and sign).
+TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem,
+                                                      std::vector<JerkRowTemplate>* templates);
+// The linearization point of a cell's jerk rows: the largest b of the quadratic through the
+// previous solution's three half-grid values lb, at least floor.
+double LinearizationPoint(const double (&lb)[3], double floor);
+// The floor of LinearizationPoint for a linearization (b at every half-grid value).
+double LinearizationFloor(const std::vector<double>& linearization);
+
+// The control values of a jerk-limited discretization (ControlBasis; control_basis.cpp), from its
+// shapes, cell edges, grid values and joints, with the sddot that a boundary acceleration fixes at
+// the start and the end (none where it fixes none) and b in a rest cell's middle over b at its
+// far end. Checked against every equality row of d; none when a case is not covered.
+std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
+                                              const std::optional<double> (&boundary_sddot)[2],
+                                              double rest_middle);
 
 }  // namespace timeopt::internal

@@ -37,6 +37,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -113,6 +114,10 @@ struct JerkContext {
   double bbar_floor = 0.0;
   // Derivatives 1..3 of every piece (rows: axes).
   std::vector<std::array<PolynomialPiece::Coefficients, 3>> derivatives;
+  // Where the regular cells' jerk rows go as templates (DiscretizeJerkLimitedTemplates), or null.
+  std::vector<internal::JerkRowTemplate>* templates = nullptr;
+  // sddot at the start and the end where the boundary acceleration fixes it (AddBoundaryAcceleration).
+  std::optional<double> boundary_sddot[2];
 
   // The half-grid index of half point j of piece i.
   int Half(int piece, int j) const { return d.GridIndex(piece, j); }
@@ -385,6 +390,27 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       emit(acc, -1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
     }
     if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, jmax);
+    if (mode == JerkRows::kNone && c.templates != nullptr) {
+      int size = 0;
+      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), Basis(j).size())));
+      SmallPoly bern_jerk[3], bern_basis[3];
+      for (int j = 0; j < 3; ++j) {
+        bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
+        bern_basis[j] = c.bernstein.Convert(Padded(Basis(j), size));
+      }
+      for (const double sign : {1.0, -1.0}) {
+        for (int i = 0; i < size; ++i) {
+          internal::JerkRowTemplate t;
+          t.g0 = g0;
+          t.jmax = jmax;
+          for (int j = 0; j < 3; ++j) {
+            t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
+            t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
+          }
+          c.templates->push_back(t);
+        }
+      }
+    }
     if (mode == JerkRows::kLinearized) {
       // The jerk rows on kJerkSegments equal parts of the cell, each linearized at the previous
       // solution's largest b on that part. One part: on the S-curve line (v 4, a 3, j 10) four
@@ -408,6 +434,7 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
         // scaled (a floor of 1e-12 made the conic solver stall). Any b > 0 keeps the row
         // conservative; below bbar_floor the rows only loosen.
         b = std::max(b, c.bbar_floor);
+        static_assert(kJerkSegments == 1, "LinearizationPoint is the one-part rule");
         const double kappa = jmax / (2.0 * b * std::sqrt(b));
         const double bound = 3.0 * jmax / (2.0 * std::sqrt(b));
         SmallPoly part_jerk[3];
@@ -459,6 +486,7 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
     }
     AddCellAcceleration(c, piece, k, end, 1.0);
     const double a = rest.dot(f1) / f1.squaredNorm();
+    c.boundary_sddot[end ? 1 : 0] = a;
     c.row.Finish(LinearRow::Kind::kBoundaryAcceleration, a, a, [&] { return field; });
     return;
   }
@@ -590,10 +618,49 @@ void StopWhereCurvatureJumps(const TemporalProblem& p, TemporalDiscretization* d
   }
 }
 
+TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem, JerkRows jerk_rows,
+                                                 const std::vector<double>* linearization,
+                                                 std::vector<internal::JerkRowTemplate>* templates);
+
 }  // namespace
+
+namespace internal {
+
+double LinearizationPoint(const double (&lb)[3], double floor) {
+  double b = std::max(lb[0], lb[2]);
+  // The quadratic's vertex inside the cell.
+  const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
+  if (c2 < 0.0) {
+    const double u = -c1 / (2.0 * c2);
+    if (u > 0.0 && u < 1.0) b = std::max(b, lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1));
+  }
+  return std::max(b, floor);
+}
+
+double LinearizationFloor(const std::vector<double>& linearization) {
+  double largest = 0.0;
+  for (double b : linearization) largest = std::max(largest, b);
+  return std::max(kLinearizationFloor * largest, std::numeric_limits<double>::min());
+}
+
+TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem,
+                                                      std::vector<JerkRowTemplate>* templates) {
+  templates->clear();
+  return DiscretizeJerkLimitedImpl(problem, JerkRows::kNone, nullptr, templates);
+}
+
+}  // namespace internal
 
 TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, JerkRows jerk_rows,
                                              const std::vector<double>* linearization) {
+  return DiscretizeJerkLimitedImpl(problem, jerk_rows, linearization, nullptr);
+}
+
+namespace {
+
+TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem, JerkRows jerk_rows,
+                                                 const std::vector<double>* linearization,
+                                                 std::vector<internal::JerkRowTemplate>* templates) {
   problem.Validate();
   if (!problem.limits.max_jerk) {
     throw std::invalid_argument("DiscretizeJerkLimited: limits.max_jerk is not set");
@@ -625,11 +692,8 @@ TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, Jer
   internal::MakeCells(half, &d);
 
   JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, 0.0, {}};
-  if (linearization != nullptr) {
-    double largest = 0.0;
-    for (double b : *linearization) largest = std::max(largest, b);
-    c.bbar_floor = std::max(kLinearizationFloor * largest, std::numeric_limits<double>::min());
-  }
+  c.templates = templates;
+  if (linearization != nullptr) c.bbar_floor = internal::LinearizationFloor(*linearization);
   for (int i = 0; i < m; ++i) {
     std::array<PolynomialPiece::Coefficients, 3> derivative;
     for (int order = 1; order <= 3; ++order) {
@@ -717,7 +781,12 @@ TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, Jer
   AddBoundaryAcceleration(c, false);
   AddBoundaryAcceleration(c, true);
   if (problem.prune_redundant_rows) internal::KeepTightestUpperBounds(&d);
+  if (!d.infeasible_reason && d.num_vars > 0) {
+    d.controls = internal::BuildControlBasis(problem, d, c.boundary_sddot, kRestMiddle);
+  }
   return d;
 }
+
+}  // namespace
 
 }  // namespace timeopt

@@ -194,6 +194,9 @@ class SocpTemporalSolver final : public TemporalSolver {
 
  protected:
   double jerk_ipopt_fallback_seconds() const override { return options_.jerk_ipopt_fallback_seconds; }
+  int structured_jerk_iterations() const override {
+    return options_.structured ? std::min(internal::BandedIpmSettings().max_iterations, options_.max_iterations) : 0;
+  }
   void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
                         std::vector<double>* x) override {
     // The structured path first (banded_ipm.h) where it applies; the conic solver decides whenever

@@ -147,13 +147,21 @@ TEST(JerkLimited, DenseSamplesRespectEveryLimitAndAccelerationIsContinuous) {
   }
 }
 
-// The sequential convex programme: every convex solve after the first is feasible for the true
-// jerk limit (each linearized row is conservative), and the reported T never increases with more
-// solves (the best jerk-feasible solve is kept).
+// The sequential convex programme: every convex solve is feasible for the true jerk limit (each
+// linearized row is conservative), and the reported T never increases with more solves (the best
+// jerk-feasible solve is kept). The first solve is linearized at the jerk-free certified optimum.
+// No solve is faster than the same problem without a jerk limit (certified rows, b linear on the
+// same K cells): the grids differ, so 0.1% is allowed, well above their discretization difference
+// and well below what the jerk limit costs here (several percent).
 TEST(JerkLimited, EveryIterateIsJerkFeasibleAndTNeverIncreases) {
   std::mt19937 rng(8);
   TemporalProblem p = test_support::WalkProblem(NaturalCubicSpline(test_support::RandomWalk(rng, 4)), 30);
   p.limits.max_jerk = Eigen::Vector3d(5.0, 5.0, 3.0);
+  TemporalProblem jerk_free = p;
+  jerk_free.limits.max_jerk.reset();
+  jerk_free.constraint_mode = ConstraintMode::kCertified;
+  const TemporalResult lower = MakeSocpTemporalSolver()->Solve(jerk_free);
+  ASSERT_TRUE(lower.is_success()) << lower.message;
   double previous = std::numeric_limits<double>::infinity();
   for (int n = 1; n <= 5; ++n) {
     p.max_scp_iterations = n;
@@ -162,9 +170,10 @@ TEST(JerkLimited, EveryIterateIsJerkFeasibleAndTNeverIncreases) {
     EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6) << n;
     EXPECT_LE(r.total_time, previous * (1.0 + 1e-12)) << n;
     previous = r.total_time;
-    // The first solve has no jerk rows: its T is a lower bound of every later one.
-    ASSERT_GE(r.scp_history.size(), 2u);
-    for (size_t i = 1; i < r.scp_history.size(); ++i) EXPECT_GE(r.scp_history[i], r.scp_history[0] * (1.0 - 1e-9));
+    ASSERT_GE(r.scp_history.size(), 1u);
+    EXPECT_LE(r.scp_history.size(), static_cast<size_t>(n));
+    for (double t : r.scp_history) EXPECT_GE(t, lower.total_time * (1.0 - 1e-3));
+    EXPECT_NEAR(r.total_time, *std::min_element(r.scp_history.begin(), r.scp_history.end()), 1e-12 * r.total_time);
   }
 }
 
@@ -254,8 +263,10 @@ TEST(JerkLimited, AFailedConicSolveFallsBackToTheExactRowsWithinItsCap) {
   EXPECT_LE(socp.max_acceleration_ratio, 1.0 + 1e-6);
   EXPECT_LE(socp.max_jerk_ratio, 1.0 + 1e-6);
 
-  // The cap: conic solves stopped by an iteration limit of 5, and a fallback given 1e-6 CPU s.
+  // The cap: conic solves stopped by an iteration limit of 5, and a fallback given 1e-6 CPU s. The
+  // structured path is off: from the certified guess it needs no more than 5 iterations here.
   SocpTemporalOptions capped;
+  capped.structured = false;
   capped.max_iterations = 5;
   capped.jerk_ipopt_fallback_seconds = 1e-6;
   const TemporalResult hopeless = MakeSocpTemporalSolver(capped)->Solve(LongQuintic(1.0, 1.0));

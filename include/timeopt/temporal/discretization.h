@@ -109,6 +109,37 @@ struct Cell {
   double time_weight = 1.0;
 };
 
+// Jerk-limited mode: b on the half grid as an affine function of control values y. On every
+// piece b is a C1 piecewise quadratic in s (sddot = b' / 2 continuous), and such a spline has one
+// degree of freedom per cell: the middle Bernstein coefficient P1 of each regular cell (b's
+// control polygon on the cell is P0, P1, P2). A knot value between two regular cells is the
+// length-weighted mean of their P1 (continuity of b'); at a cell that leaves or reaches rest, at a
+// joint without a stop and at a boundary whose acceleration is given, the knot or P1 follows from
+// the same continuity rows. So y satisfies every equality row of the discretization by
+// construction, and every row over y touches at most three consecutive control values: the Newton
+// system of an interior-point method over y is banded (banded_ipm.h). y_c = P1 / scale of the
+// grid value in the cell's middle, so that y is about the squared speed relative to the limit, as
+// x is.
+struct ControlForm {
+  static constexpr int kMaxTerms = 4;
+  int first = 0;                       // the first control value it touches
+  int count = 0;                       // how many consecutive ones (0: a constant)
+  std::array<double, kMaxTerms> coef{};
+  double constant = 0.0;
+  double Value(const std::vector<double>& y) const {
+    double v = constant;
+    for (int t = 0; t < count; ++t) v += coef[static_cast<size_t>(t)] * y[static_cast<size_t>(first + t)];
+    return v;
+  }
+};
+
+struct ControlBasis {
+  int num_controls = 0;
+  std::vector<ControlForm> grid;  // b at every half-grid value (the discretization's grid)
+  std::vector<int> middle;        // per control: the half-grid index of its cell's middle
+  std::vector<double> scale;      // per control: P1 = scale * y
+};
+
 struct TemporalDiscretization {
   int num_pieces = 0;
   int cells_per_piece = 0;
@@ -132,6 +163,13 @@ struct TemporalDiscretization {
   std::vector<CellShape> shapes;
   // Jerk-limited mode: the K + 1 cell edges of every piece in [0, 1] (graded towards rest points).
   std::vector<std::vector<double>> cell_edges;
+  // Jerk-limited mode: the control values that satisfy every equality row by construction (see
+  // ControlBasis); empty when the grid has a case they do not cover (then only the general
+  // solvers take it).
+  std::optional<ControlBasis> controls;
+  // Optional: b at every grid value of a nearby answer (the previous solve of a sequential convex
+  // programme), where a solver that can use a start begins.
+  std::vector<double> start_b;
   // Set when presolve already proves the problem infeasible (e.g. a boundary speed above the
   // limit); the backends then report infeasible with this message without solving.
   std::optional<std::string> infeasible_reason;

@@ -41,6 +41,10 @@ class TemporalSolver {
   // CPU seconds for retrying a failed jerk-limited solve with the Ipopt backend's exact rows (0:
   // no retry).
   virtual double jerk_ipopt_fallback_seconds() const { return 0.0; }
+  // The iteration limit of each interior-point solve of the structured sequential convex programme
+  // (banded solves over the control values), which a jerk-limited problem goes to first; 0: none
+  // (the general path only). The SOCP backend with `structured`.
+  virtual int structured_jerk_iterations() const { return 0; }
 
  private:
   // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited, or one solve

@@ -1,0 +1,273 @@
+// The control values of the jerk-limited discretization (ControlBasis in discretization.h;
+// BuildControlBasis in discretization_internal.h).
+//
+// On a regular cell of length L with control polygon P0, P1, P2, b(u) = P0 (1 - u)^2 + 2 P1 u (1 - u)
+// + P2 u^2, so sddot = b' / 2 is (P1 - P0) / L at the start and (P2 - P1) / L at the end. Its three
+// half-grid values are P0, (P0 + 2 P1 + P2) / 4 and P2. The knots follow from continuity of sddot:
+//   between regular cells k - 1 and k:  P = (L_k P1_{k-1} + L_{k-1} P1_k) / (L_{k-1} + L_k);
+//   after a rest cell of length L0 (b = b1 u^(4/3), sddot = 2 b1 / (3 L0) at its end):
+//                                       b1 = P1_1 / (1 + 2 L1 / (3 L0)), and its mirror;
+//   at a boundary whose sddot a is given: P1 = P0 + a L (start) or P2 - a L (end), a constant;
+//   at a joint without a stop, with b after it = rho b before it (rho the ratio of the shared grid
+//   value's scales) and the tangential acceleration equal on both sides, |f'+|^2 sddot+ =
+//   f'+ . f'- sddot- + f'+ . (f''- - rho f''+) b-:  E (rho / L+ + alpha / L- + beta) =
+//   P1+ / L+ + alpha P1- / L-, with alpha and beta the two coefficients over |f'+|^2.
+// Every other case (a rest cell next to a rest cell, a boundary without a given sddot, a joint whose
+// knot is not a positive mean) has no basis here, and the general solvers take the problem.
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "discretization_internal.h"
+
+namespace timeopt::internal {
+namespace {
+
+// An affine form over the control values with a few terms (merged by index).
+struct Form {
+  static constexpr int kMax = 8;
+  std::array<std::pair<int, double>, kMax> terms{};
+  int n = 0;
+  double constant = 0.0;
+
+  static Form Control(int c, double coef) {
+    Form f;
+    f.terms[0] = {c, coef};
+    f.n = 1;
+    return f;
+  }
+  static Form Constant(double v) {
+    Form f;
+    f.constant = v;
+    return f;
+  }
+  // *this += w * other; false when the terms do not fit.
+  bool Add(const Form& other, double w) {
+    constant += w * other.constant;
+    for (int t = 0; t < other.n; ++t) {
+      const auto& [c, v] = other.terms[static_cast<size_t>(t)];
+      int i = 0;
+      while (i < n && terms[static_cast<size_t>(i)].first != c) ++i;
+      if (i == n) {
+        if (n == kMax) return false;
+        terms[static_cast<size_t>(n++)] = {c, 0.0};
+      }
+      terms[static_cast<size_t>(i)].second += w * v;
+    }
+    return true;
+  }
+  bool IsConstant() const {
+    for (int t = 0; t < n; ++t) {
+      if (terms[static_cast<size_t>(t)].second != 0.0) return false;
+    }
+    return true;
+  }
+};
+
+Form Combine(const Form& a, double wa, const Form& b, double wb, bool* ok) {
+  Form out;
+  *ok = *ok && out.Add(a, wa) && out.Add(b, wb);
+  return out;
+}
+
+// The form as a ControlForm (consecutive terms); false when they span more than kMaxTerms.
+bool ToControlForm(const Form& f, ControlForm* out) {
+  *out = ControlForm();
+  out->constant = f.constant;
+  int lo = 0, hi = -1;
+  for (int t = 0; t < f.n; ++t) {
+    const auto& [c, v] = f.terms[static_cast<size_t>(t)];
+    if (v == 0.0) continue;
+    if (hi < lo) lo = hi = c;
+    lo = std::min(lo, c);
+    hi = std::max(hi, c);
+  }
+  if (hi < lo) return true;
+  if (hi - lo + 1 > ControlForm::kMaxTerms) return false;
+  out->first = lo;
+  out->count = hi - lo + 1;
+  for (int t = 0; t < f.n; ++t) {
+    const auto& [c, v] = f.terms[static_cast<size_t>(t)];
+    if (v != 0.0) out->coef[static_cast<size_t>(c - lo)] += v;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
+                                              const std::optional<double> (&boundary_sddot)[2],
+                                              const double rest_middle) {
+  const int m = d.num_pieces;
+  const int K = static_cast<int>(d.shapes.size()) / std::max(m, 1);
+  if (m <= 0 || K <= 0 || static_cast<int>(d.shapes.size()) != m * K) return std::nullopt;
+  const auto shape = [&](int i, int k) { return d.shapes[static_cast<size_t>(i * K + k)]; };
+  const auto len = [&](int i, int k) {
+    const std::vector<double>& e = d.cell_edges[static_cast<size_t>(i)];
+    return e[static_cast<size_t>(k) + 1] - e[static_cast<size_t>(k)];
+  };
+  const auto grid = [&](int i, int j) -> const GridValue& { return d.grid[static_cast<size_t>(d.GridIndex(i, j))]; };
+
+  ControlBasis basis;
+  bool ok = true;
+  // P1 of every regular cell (path order) and the knots of every piece.
+  std::vector<Form> p1(static_cast<size_t>(m * K));
+  std::vector<bool> has_p1(static_cast<size_t>(m * K), false);
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < K; ++k) {
+      if (shape(i, k) != CellShape::kQuadratic) continue;
+      Form& f = p1[static_cast<size_t>(i * K + k)];
+      has_p1[static_cast<size_t>(i * K + k)] = true;
+      const bool first = i == 0 && k == 0, last = i == m - 1 && k == K - 1;
+      if (first && grid(0, 0).var < 0) {
+        if (!boundary_sddot[0]) return std::nullopt;
+        f = Form::Constant(grid(0, 0).fixed + *boundary_sddot[0] * len(i, k));
+        continue;
+      }
+      if (last && grid(m - 1, 2 * K).var < 0) {
+        if (!boundary_sddot[1]) return std::nullopt;
+        f = Form::Constant(grid(m - 1, 2 * K).fixed - *boundary_sddot[1] * len(i, k));
+        continue;
+      }
+      // The first/last cell of a piece whose boundary value is free but not shared: not covered.
+      if ((first || last) && (first ? grid(0, 0).var : grid(m - 1, 2 * K).var) >= 0) return std::nullopt;
+      const GridValue& mid = grid(i, 2 * k + 1);
+      if (mid.var < 0 || !(mid.scale > 0.0)) return std::nullopt;
+      f = Form::Control(basis.num_controls++, mid.scale);
+      basis.middle.push_back(d.GridIndex(i, 2 * k + 1));
+      basis.scale.push_back(mid.scale);
+    }
+  }
+  // Knot k of piece i (k = 0..K), in b.
+  std::vector<Form> knot(static_cast<size_t>(m * (K + 1)));
+  const auto knot_at = [&](int i, int k) -> Form& { return knot[static_cast<size_t>(i * (K + 1) + k)]; };
+  const auto P1 = [&](int i, int k) -> const Form* {
+    return has_p1[static_cast<size_t>(i * K + k)] ? &p1[static_cast<size_t>(i * K + k)] : nullptr;
+  };
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k <= K; ++k) {
+      const GridValue& g = grid(i, 2 * k);
+      Form& f = knot_at(i, k);
+      const bool piece_start = k == 0, piece_end = k == K;
+      if ((piece_start || piece_end) && g.var < 0) {
+        f = Form::Constant(g.fixed);
+        continue;
+      }
+      if (piece_start) continue;  // a shared value at a joint: set with the previous piece's end
+      if (piece_end) {
+        // A joint without a stop (its value is a free variable shared with the next piece).
+        if (i + 1 >= m) return std::nullopt;
+        const Form* before = P1(i, K - 1);
+        const Form* after = P1(i + 1, 0);
+        const GridValue& next = grid(i + 1, 0);
+        if (before == nullptr || after == nullptr || next.var != g.var || !(g.scale > 0.0)) return std::nullopt;
+        const double rho = next.scale / g.scale;
+        const Eigen::Vector3d f1a = problem.curve.Evaluate(i, 1.0, 1), f1b = problem.curve.Evaluate(i + 1, 0.0, 1);
+        const Eigen::Vector3d f2a = problem.curve.Evaluate(i, 1.0, 2), f2b = problem.curve.Evaluate(i + 1, 0.0, 2);
+        const double n2 = f1b.squaredNorm();
+        if (!(n2 > 0.0)) return std::nullopt;
+        const double alpha = f1b.dot(f1a) / n2, beta = f1b.dot(f2a - rho * f2b) / n2;
+        const double la = len(i, K - 1), lb = len(i + 1, 0);
+        const double denominator = rho / lb + alpha / la + beta;
+        if (!(alpha > 0.0) || !(denominator > 0.0)) return std::nullopt;
+        f = Combine(*before, alpha / la / denominator, *after, 1.0 / lb / denominator, &ok);
+        Form& shared = knot_at(i + 1, 0);
+        shared = Form();
+        ok = ok && shared.Add(f, rho);
+        continue;
+      }
+      // An interior knot.
+      const CellShape left = shape(i, k - 1), right = shape(i, k);
+      if (left == CellShape::kQuadratic && right == CellShape::kQuadratic) {
+        const double l0 = len(i, k - 1), l1 = len(i, k);
+        f = Combine(*P1(i, k - 1), l1 / (l0 + l1), *P1(i, k), l0 / (l0 + l1), &ok);
+      } else if (left == CellShape::kRestStart && right == CellShape::kQuadratic) {
+        f = Form();
+        ok = ok && f.Add(*P1(i, k), 1.0 / (1.0 + 2.0 * len(i, k) / (3.0 * len(i, k - 1))));
+      } else if (left == CellShape::kQuadratic && right == CellShape::kRestEnd) {
+        f = Form();
+        ok = ok && f.Add(*P1(i, k - 1), 1.0 / (1.0 + 2.0 * len(i, k - 1) / (3.0 * len(i, k))));
+      } else {
+        return std::nullopt;
+      }
+    }
+  }
+  if (!ok) return std::nullopt;
+  // Every half-grid value.
+  basis.grid.resize(d.grid.size());
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < K; ++k) {
+      const Form& a = knot_at(i, k);
+      const Form& b = knot_at(i, k + 1);
+      Form middle;
+      switch (shape(i, k)) {
+        case CellShape::kQuadratic:
+          ok = ok && middle.Add(a, 0.25) && middle.Add(*P1(i, k), 0.5) && middle.Add(b, 0.25);
+          break;
+        case CellShape::kRestStart:
+          ok = ok && middle.Add(b, rest_middle);
+          break;
+        case CellShape::kRestEnd:
+          ok = ok && middle.Add(a, rest_middle);
+          break;
+      }
+      ok = ok && ToControlForm(a, &basis.grid[static_cast<size_t>(d.GridIndex(i, 2 * k))]) &&
+           ToControlForm(middle, &basis.grid[static_cast<size_t>(d.GridIndex(i, 2 * k + 1))]) &&
+           ToControlForm(b, &basis.grid[static_cast<size_t>(d.GridIndex(i, 2 * k + 2))]);
+    }
+  }
+  if (!ok || basis.num_controls == 0) return std::nullopt;
+  // The forms must agree with the grid: a fixed value is a constant equal to it.
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    const ControlForm& f = basis.grid[g];
+    if (v.var < 0 && (f.count != 0 || std::abs(f.constant - v.fixed) > 1e-12 * std::max(1.0, std::abs(v.fixed)))) {
+      return std::nullopt;
+    }
+  }
+  // And they must satisfy every equality row identically (the check that the cases above are
+  // the discretization's): x_var = b_g / scale_g.
+  std::vector<const ControlForm*> of_var(static_cast<size_t>(d.num_vars), nullptr);
+  std::vector<double> var_scale(static_cast<size_t>(d.num_vars), 1.0);
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    if (v.var >= 0 && of_var[static_cast<size_t>(v.var)] == nullptr) {
+      of_var[static_cast<size_t>(v.var)] = &basis.grid[g];
+      var_scale[static_cast<size_t>(v.var)] = v.scale;
+    }
+  }
+  for (const ControlForm* f : of_var) {
+    if (f == nullptr) return std::nullopt;
+  }
+  int equalities = 0;
+  for (const LinearRow& row : d.rows) {
+    if (row.lower != row.upper) continue;
+    ++equalities;
+    Form sum;
+    double size = std::abs(row.lower);
+    for (const auto& [var, coef] : row.terms) {
+      const ControlForm& f = *of_var[static_cast<size_t>(var)];
+      const double w = coef / var_scale[static_cast<size_t>(var)];
+      sum.constant += w * f.constant;
+      size = std::max(size, std::abs(w * f.constant));
+      for (int t = 0; t < f.count; ++t) {
+        Form one = Form::Control(f.first + t, w * f.coef[static_cast<size_t>(t)]);
+        size = std::max(size, std::abs(one.terms[0].second));
+        if (!sum.Add(one, 1.0)) return std::nullopt;
+      }
+    }
+    const double tolerance = 1e-9 * std::max(size, 1e-300);
+    if (std::abs(sum.constant - row.lower) > tolerance) return std::nullopt;
+    for (int t = 0; t < sum.n; ++t) {
+      if (std::abs(sum.terms[static_cast<size_t>(t)].second) > tolerance) return std::nullopt;
+    }
+  }
+  // As many controls as the equalities leave free: the basis spans every profile of the grid.
+  if (basis.num_controls + equalities < d.num_vars) return std::nullopt;
+  return basis;
+}
+
+}  // namespace timeopt::internal
