@@ -131,6 +131,9 @@ bool GreedyProfile(const BandedProblem& p, std::vector<double>* out, double marg
   return true;
 }
 
+// W: the width every row is treated as (its coefficients past `count` are 0, and the vectors over
+// the unknowns carry W zeros past n), so that the loops over a row's terms have a fixed length.
+template <int W>
 class BandedIpm {
  public:
   BandedIpm(const BandedProblem& p, const BandedIpmSettings& settings)
@@ -162,7 +165,7 @@ class BandedIpm {
         out.kind = BandedIpmOutcome::Kind::kOptimal;
         out.x.resize(p_.x_form.size());
         for (size_t v = 0; v < out.x.size(); ++v) out.x[v] = p_.x_form[v].Value(x_);
-        out.y = x_;
+        out.y.assign(x_.begin(), x_.begin() + n_);
         return out;
       }
       if (it >= settings_.max_iterations) {
@@ -184,10 +187,11 @@ class BandedIpm {
   // inside at x0 or J is not finite there.
   bool Start(const std::vector<double>& y0) {
     x_ = p_.cap;
+    x_.resize(static_cast<size_t>(n_ + W), 0.0);
     double t_max = 1.0;
     for (int r = n_; r < m_; ++r) {
       if (!(h_[static_cast<size_t>(r)] > 0.0)) continue;
-      const double value = rows_[static_cast<size_t>(r)].Value(x_);
+      const double value = Dot(rows_[static_cast<size_t>(r)], x_);
       if (value > h_[static_cast<size_t>(r)]) t_max = std::min(t_max, h_[static_cast<size_t>(r)] / value);
     }
     const bool guess = y0.size() == static_cast<size_t>(n_);
@@ -201,7 +205,7 @@ class BandedIpm {
     z_.assign(static_cast<size_t>(m_), 0.0);
     constexpr double kSlackFloor = 1e-2;
     for (int r = 0; r < m_; ++r) {
-      const double slack = h_[static_cast<size_t>(r)] - rows_[static_cast<size_t>(r)].Value(x_);
+      const double slack = h_[static_cast<size_t>(r)] - Dot(rows_[static_cast<size_t>(r)], x_);
       s_[static_cast<size_t>(r)] = r < n_ ? x_[static_cast<size_t>(r)] : std::max(slack, kSlackFloor);
     }
     // z = mu0 / s with s'z = kStartGap J(x0).
@@ -213,8 +217,16 @@ class BandedIpm {
   }
 
   // J, its gradient and (into hess_) its Hessian at x_; the residuals r_d and r_p.
+  // A row's value at v (W terms; v carries W zeros past n).
+  static double Dot(const BandedRow& row, const std::vector<double>& v) {
+    const double* x = v.data() + row.first;
+    double value = 0.0;
+    for (int t = 0; t < W; ++t) value += row.v[t] * x[t];
+    return value;
+  }
+
   void Evaluate() {
-    grad_.assign(static_cast<size_t>(n_), 0.0);
+    grad_.assign(static_cast<size_t>(n_ + W), 0.0);
     hess_.Reset(n_, p_.bandwidth);
     objective_ = 0.0;
     for (const BandedCell& c : p_.cells) {
@@ -283,11 +295,11 @@ class BandedIpm {
     rd_ = grad_;
     rp_.resize(static_cast<size_t>(m_));
     for (const RowRun& run : runs_) {
-      double acc[kMaxRowSpan] = {};
+      double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
-        for (int t = 0; t < row.count; ++t) acc[t] += row.v[t] * z_[static_cast<size_t>(r)];
-        rp_[static_cast<size_t>(r)] = row.Value(x_) + s_[static_cast<size_t>(r)] - h_[static_cast<size_t>(r)];
+        for (int t = 0; t < W; ++t) acc[t] += row.v[t] * z_[static_cast<size_t>(r)];
+        rp_[static_cast<size_t>(r)] = Dot(row, x_) + s_[static_cast<size_t>(r)] - h_[static_cast<size_t>(r)];
       }
       for (int t = 0; t < run.span; ++t) rd_[static_cast<size_t>(run.first + t)] += acc[t];
     }
@@ -311,15 +323,15 @@ class BandedIpm {
   // Solves the Newton system for the complementarity target rc into dx, ds, dz; returns the
   // largest step in (0, inf] that keeps s and z >= 0.
   double Direction(const std::vector<double>& rc) {
-    dx_.resize(static_cast<size_t>(n_));
+    dx_.assign(static_cast<size_t>(n_ + W), 0.0);
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
     for (const RowRun& run : runs_) {
-      double acc[kMaxRowSpan] = {};
+      double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
         const size_t i = static_cast<size_t>(r);
         const double t = (rc[i] - z_[i] * rp_[i]) * inv_s_[i];
-        for (int k = 0; k < row.count; ++k) acc[k] += row.v[k] * t;
+        for (int k = 0; k < W; ++k) acc[k] += row.v[k] * t;
       }
       for (int k = 0; k < run.span; ++k) dx_[static_cast<size_t>(run.first + k)] += acc[k];
     }
@@ -329,7 +341,7 @@ class BandedIpm {
     // The largest step as 1 / max(-ds / s, -dz / z) (multiplications, not a division per row).
     double inverse = 0.0;
     for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const double gdx = rows_[r].Value(dx_);
+      const double gdx = Dot(rows_[r], dx_);
       const double ds = -rp_[r] - gdx;
       const double dz = (z_[r] * (rp_[r] + gdx) - rc[r]) * inv_s_[r];
       ds_[r] = ds;
@@ -346,7 +358,7 @@ class BandedIpm {
     inv_s_.resize(static_cast<size_t>(m_));
     inv_z_.resize(static_cast<size_t>(m_));
     for (const RowRun& run : runs_) {
-      double block[kMaxRowSpan][kMaxRowSpan] = {};  // lower triangle
+      double block[W][W] = {};  // lower triangle
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
         const size_t i = static_cast<size_t>(r);
@@ -354,7 +366,7 @@ class BandedIpm {
         inv_z_[i] = 1.0 / z_[i];
         const double w = z_[i] * inv_s_[i];
         mu += s_[i] * z_[i];
-        for (int a = 0; a < row.count; ++a) {
+        for (int a = 0; a < W; ++a) {
           const double wa = w * row.v[a];
           for (int b = 0; b <= a; ++b) block[a][b] += wa * row.v[b];
         }
@@ -448,75 +460,49 @@ bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, dou
   return true;
 }
 
-bool BandedProblem::AddGridRow(const int* grid, const double* coef, int count, double bound) {
-  BandedRow row;
-  row.kind = static_cast<short>(LinearRow::Kind::kJerk);
+bool BandedProblem::MapGridRow(const int* grid, const double* coef, int count, BandedRow* row, double* constant) const {
+  *row = BandedRow();
+  *constant = 0.0;
   int lo = n, hi = -1;
   for (int j = 0; j < count; ++j) {
     const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
-    bound -= coef[j] * f.constant;
+    *constant += coef[j] * f.constant;
     if (f.count > 0 && coef[j] != 0.0) {
       lo = std::min(lo, f.first);
       hi = std::max(hi, f.first + f.count - 1);
     }
   }
-  if (hi < lo) return bound >= -1e-9;
+  if (hi < lo) return true;
   if (hi - lo + 1 > kMaxRowSpan) return false;
-  row.first = lo;
-  row.count = static_cast<short>(hi - lo + 1);
+  row->first = lo;
+  row->count = static_cast<short>(hi - lo + 1);
   for (int j = 0; j < count; ++j) {
     const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
     if (coef[j] == 0.0) continue;
-    for (int t = 0; t < f.count; ++t) row.v[f.first + t - lo] += coef[j] * f.coef[static_cast<size_t>(t)];
+    for (int t = 0; t < f.count; ++t) row->v[f.first + t - lo] += coef[j] * f.coef[static_cast<size_t>(t)];
   }
+  return true;
+}
+
+bool BandedProblem::AppendRow(BandedRow row, double bound) {
+  if (row.count == 0) return bound >= -1e-9;
   double scale = std::abs(bound);
   if (!(scale > 0.0)) {
     for (int t = 0; t < row.count; ++t) scale = std::max(scale, std::abs(row.v[t]));
   }
   if (!(scale > 0.0)) scale = 1.0;
   for (int t = 0; t < row.count; ++t) row.v[t] /= scale;
+  row.kind = static_cast<short>(kind);
   rows.push_back(row);
   h.push_back(bound / scale);
   essential.push_back(!(h.back() > 0.0) ? 1 : 0);
   return true;
 }
 
-void BandedProblem::PruneDominatedRows(size_t from) {
-  // Rows are compared within runs of the same window (a cell's rows come together), against the
-  // ones kept so far in the run.
-  const auto dominated = [](const BandedRow& a, const BandedRow& b) {  // a <= b componentwise
-    for (int t = 0; t < a.count; ++t) {
-      if (a.v[t] > b.v[t]) return false;
-    }
-    return true;
-  };
-  std::vector<char> keep(rows.size(), 1);
-  std::vector<size_t> window;  // kept rows of the current run with h = 1
-  for (size_t r = from; r < rows.size(); ++r) {
-    const BandedRow& row = rows[r];
-    if (h[r] != 1.0) continue;
-    if (!window.empty() && (rows[window[0]].first != row.first || rows[window[0]].count != row.count)) window.clear();
-    // An essential row is never dropped (a working set keeps it), but it may imply others.
-    bool skip = false;
-    for (size_t k : window) {
-      if (!essential[r] && dominated(row, rows[k])) {
-        skip = true;
-        break;
-      }
-    }
-    if (skip) {
-      keep[r] = 0;
-      continue;
-    }
-    size_t out = 0;
-    for (size_t k : window) {
-      if (!essential[k] && dominated(rows[k], row)) keep[k] = 0;
-      else window[out++] = k;
-    }
-    window.resize(out);
-    window.push_back(r);
-  }
-  KeepRows(keep);
+bool BandedProblem::AddGridRow(const int* grid, const double* coef, int count, double bound) {
+  BandedRow row;
+  double constant = 0.0;
+  return MapGridRow(grid, coef, count, &row, &constant) && AppendRow(row, bound - constant);
 }
 
 void BandedProblem::KeepRows(const std::vector<char>& keep) {
@@ -626,9 +612,7 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
     *why = "a row over more than four unknowns, or a constant row violated";
     return false;
   }
-  if (p.controls) {
-    p.PruneDominatedRows(static_cast<size_t>(p.n));
-  } else {
+  if (!p.controls) {
     // Without the reachability start (which needs these rows) the method took 37-75 iterations
     // where the conic solver takes 15-26 (lambda_a's rows over three values), so it stops here.
     for (const BandedRow& row : p.rows) {
@@ -669,7 +653,11 @@ BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<do
     out.message = "half-bandwidth " + std::to_string(p.bandwidth);
     return out;
   }
-  return BandedIpm(p, settings).Run(y0);
+  int width = 1;
+  for (const BandedRow& row : p.rows) width = std::max<int>(width, row.count);
+  if (width <= 2) return BandedIpm<2>(p, settings).Run(y0);
+  if (width == 3) return BandedIpm<3>(p, settings).Run(y0);
+  return BandedIpm<kMaxRowSpan>(p, settings).Run(y0);
 }
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings) {

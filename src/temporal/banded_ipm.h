@@ -101,9 +101,12 @@ struct BandedProblem {
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
   // Appends the row sum_j coef[j] b_{grid[j]} <= bound over `count` grid values; as AddRow.
   bool AddGridRow(const int* grid, const double* coef, int count, double bound);
-  // Drops the rows (from `from` on) that another row over the same unknowns implies: with h = 1
-  // both and y >= 0, v . y <= w . y <= 1 when v <= w componentwise.
-  void PruneDominatedRows(size_t from);
+  // sum_j coef[j] b_{grid[j]} as *row . y + *constant (unscaled); false when it spans more than
+  // kMaxRowSpan unknowns.
+  bool MapGridRow(const int* grid, const double* coef, int count, BandedRow* row, double* constant) const;
+  // Appends row . y <= bound, scaled so that the bound is +-1 or 0 (a row without terms: false
+  // when it is violated, else dropped).
+  bool AppendRow(BandedRow row, double bound);
   // Keeps only the rows whose flag is set (the first n always), in order.
   void KeepRows(const std::vector<char>& keep);
 };

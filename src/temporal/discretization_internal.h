@@ -211,10 +211,20 @@ struct JerkRowTemplate {
   std::array<double, 3> a{};
   std::array<double, 3> basis{};
 };
-// The jerk-limited discretization without the jerk rows of regular cells (JerkRows::kNone), and
-// those rows as templates (one per Bernstein coefficient, axis and sign).
-TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem,
-                                                      std::vector<JerkRowTemplate>* templates);
+// A row sum_j coef[j] b_{g0 + j} <= 1 over a regular cell's three half-grid values.
+struct GridRow {
+  int g0 = 0;
+  LinearRow::Kind kind = LinearRow::Kind::kVelocity;
+  std::array<double, 3> coef{};
+};
+struct JerkTemplates {
+  std::vector<GridRow> cell_rows;          // the regular cells' velocity and acceleration rows
+  std::vector<JerkRowTemplate> jerk_rows;  // their jerk rows, one per Bernstein coefficient, axis and sign
+};
+// For the structured path: the jerk-limited discretization without the regular cells' velocity,
+// acceleration and jerk rows (JerkRows::kNone otherwise), which go to *templates instead, over grid
+// values (no rows over the free values to build). Its rows alone are not the problem.
+TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates);
 // The linearization point of a cell's jerk rows: the largest b of the quadratic through the
 // previous solution's three half-grid values lb, at least floor.
 double LinearizationPoint(const double (&lb)[3], double floor);

@@ -114,8 +114,9 @@ struct JerkContext {
   double bbar_floor = 0.0;
   // Derivatives 1..3 of every piece (rows: axes).
   std::vector<std::array<PolynomialPiece::Coefficients, 3>> derivatives;
-  // Where the regular cells' jerk rows go as templates (DiscretizeJerkLimitedTemplates), or null.
-  std::vector<internal::JerkRowTemplate>* templates = nullptr;
+  // Where the regular cells' velocity, acceleration and jerk rows go (DiscretizeJerkLimitedTemplates),
+  // or null.
+  internal::JerkTemplates* templates = nullptr;
   // sddot at the start and the end where the boundary acceleration fixes it (AddBoundaryAcceleration).
   std::optional<double> boundary_sddot[2];
 
@@ -360,6 +361,15 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       }
       for (int i = 0; i < size; ++i) {
         if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;  // holds for b >= 0
+        if (c.templates != nullptr) {
+          // Over the cell's grid values, for the structured path (DiscretizeJerkLimitedTemplates).
+          internal::GridRow row;
+          row.g0 = g0;
+          row.kind = kind;
+          for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = bern[j](i) / bound;
+          c.templates->cell_rows.push_back(row);
+          continue;
+        }
         for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / bound);
         c.row.Finish(kind, -kInf, 1.0, [&] {
           return std::string("a limit on axis ") + kAxisNames[a] + " in piece " +
@@ -407,7 +417,7 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
             t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
             t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
           }
-          c.templates->push_back(t);
+          c.templates->jerk_rows.push_back(t);
         }
       }
     }
@@ -620,7 +630,7 @@ void StopWhereCurvatureJumps(const TemporalProblem& p, TemporalDiscretization* d
 
 TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem, JerkRows jerk_rows,
                                                  const std::vector<double>* linearization,
-                                                 std::vector<internal::JerkRowTemplate>* templates);
+                                                 internal::JerkTemplates* templates);
 
 }  // namespace
 
@@ -643,9 +653,8 @@ double LinearizationFloor(const std::vector<double>& linearization) {
   return std::max(kLinearizationFloor * largest, std::numeric_limits<double>::min());
 }
 
-TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem,
-                                                      std::vector<JerkRowTemplate>* templates) {
-  templates->clear();
+TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates) {
+  *templates = JerkTemplates();
   return DiscretizeJerkLimitedImpl(problem, JerkRows::kNone, nullptr, templates);
 }
 
@@ -660,7 +669,7 @@ namespace {
 
 TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem, JerkRows jerk_rows,
                                                  const std::vector<double>* linearization,
-                                                 std::vector<internal::JerkRowTemplate>* templates) {
+                                                 internal::JerkTemplates* templates) {
   problem.Validate();
   if (!problem.limits.max_jerk) {
     throw std::invalid_argument("DiscretizeJerkLimited: limits.max_jerk is not set");
