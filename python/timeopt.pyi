@@ -113,6 +113,7 @@ class TemporalResult:
     jerk_limited: bool
     scp_iterations: int
     reduced_accuracy: bool
+    method: str
     infeasibility: Optional[dict[str, str]]
     def is_success(self) -> bool: ...
     def to_json(self) -> str: ...

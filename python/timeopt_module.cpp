@@ -533,6 +533,7 @@ PYBIND11_MODULE(timeopt, m) {
       .def_readonly("jerk_limited", &TemporalResult::jerk_limited)
       .def_readonly("scp_iterations", &TemporalResult::scp_iterations)
       .def_readonly("reduced_accuracy", &TemporalResult::reduced_accuracy)
+      .def_readonly("method", &TemporalResult::method)
       .def_property_readonly(
           "infeasibility",
           [](const TemporalResult& r) -> py::object {

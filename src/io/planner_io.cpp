@@ -201,6 +201,7 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
   j["waypoints"] = static_cast<int>(plan.waypoints.cols());
   j["spatial_attempts"] = plan.spatial_attempts;
   j["start_scale"] = plan.start_scale;
+  if (!plan.temporal.method.empty()) j["temporal_method"] = plan.temporal.method;
   j["spatial_iterations"] = static_cast<int>(plan.spatial.iterations.size());
   j["max_velocity_ratio"] = value_if(ok, plan.temporal.max_velocity_ratio);
   j["max_acceleration_ratio"] = value_if(ok, plan.temporal.max_acceleration_ratio);

@@ -109,6 +109,7 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   const bool ok = r.is_success();
   j["status"] = ToString(r.status);
   j["solver"] = r.solver;
+  if (!r.method.empty()) j["method"] = r.method;
   j["total_time"] = ok ? json(r.total_time) : json(nullptr);
   j["objective"] = ok ? json(r.objective) : json(nullptr);
   j["piece_durations"] = ok ? json(r.piece_durations) : json::array();

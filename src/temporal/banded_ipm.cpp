@@ -676,13 +676,8 @@ BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSet
       return out;
     }
   } else if (d.start_b.size() == d.grid.size()) {
-    // The control values of d.start_b: P1 = (4 b_mid - b_start - b_end) / 2 of each one's cell.
     y0.resize(static_cast<size_t>(p.n));
-    for (int v = 0; v < p.n; ++v) {
-      const size_t g = static_cast<size_t>(d.controls->middle[static_cast<size_t>(v)]);
-      const double p1 = 0.5 * (4.0 * d.start_b[g] - d.start_b[g - 1] - d.start_b[g + 1]);
-      y0[static_cast<size_t>(v)] = p1 / d.controls->scale[static_cast<size_t>(v)];
-    }
+    for (int v = 0; v < p.n; ++v) y0[static_cast<size_t>(v)] = d.controls->FromGrid(v, d.start_b);
   }
   return SolveBandedProblem(p, y0, settings);
 }

@@ -12,8 +12,11 @@
 //   value's scales) and the tangential acceleration equal on both sides, |f'+|^2 sddot+ =
 //   f'+ . f'- sddot- + f'+ . (f''- - rho f''+) b-:  E (rho / L+ + alpha / L- + beta) =
 //   P1+ / L+ + alpha P1- / L-, with alpha and beta the two coefficients over |f'+|^2.
-// Every other case (a rest cell next to a rest cell, a boundary without a given sddot, a joint whose
-// knot is not a positive mean) has no basis here, and the general solvers take the problem.
+//   at a boundary where the tangent vanishes, b is fixed by the acceleration (acc = f'' b), or is a
+//   control of its own where the curvature vanishes too (nothing bounds it but its cell's rows),
+//   and P1 is free.
+// Every other case (a rest cell next to a rest cell, a boundary without a given sddot or b, a joint
+// whose knot is not a positive mean) has no basis here, and the general solvers take the problem.
 
 #include <algorithm>
 #include <cmath>
@@ -100,7 +103,7 @@ bool ToControlForm(const Form& f, ControlForm* out) {
 
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
                                               const std::optional<double> (&boundary_sddot)[2],
-                                              const double rest_middle) {
+                                              const std::optional<double> (&boundary_b)[2], const double rest_middle) {
   const int m = d.num_pieces;
   const int K = static_cast<int>(d.shapes.size()) / std::max(m, 1);
   if (m <= 0 || K <= 0 || static_cast<int>(d.shapes.size()) != m * K) return std::nullopt;
@@ -116,6 +119,19 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   // P1 of every regular cell (path order) and the knots of every piece.
   std::vector<Form> p1(static_cast<size_t>(m * K));
   std::vector<bool> has_p1(static_cast<size_t>(m * K), false);
+  // A boundary value bound by nothing (tangent and curvature vanish: no row fixes b) is a control
+  // of its own, before the first P1 or after the last.
+  Form free_boundary[2];
+  const auto add_free_boundary = [&](int end) {
+    const int g = end == 0 ? d.GridIndex(0, 0) : d.GridIndex(m - 1, 2 * K);
+    const GridValue& v = d.grid[static_cast<size_t>(g)];
+    if (v.var < 0 || boundary_b[end] || !(v.scale > 0.0)) return;
+    free_boundary[end] = Form::Control(basis.num_controls++, v.scale);
+    basis.middle.push_back(g);
+    basis.at_knot.push_back(1);
+    basis.scale.push_back(v.scale);
+  };
+  add_free_boundary(0);
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) {
       if (shape(i, k) != CellShape::kQuadratic) continue;
@@ -132,15 +148,16 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         f = Form::Constant(grid(m - 1, 2 * K).fixed - *boundary_sddot[1] * len(i, k));
         continue;
       }
-      // The first/last cell of a piece whose boundary value is free but not shared: not covered.
-      if ((first || last) && (first ? grid(0, 0).var : grid(m - 1, 2 * K).var) >= 0) return std::nullopt;
+      // A boundary value that is free (a vanishing tangent) leaves this P1 free like any other.
       const GridValue& mid = grid(i, 2 * k + 1);
       if (mid.var < 0 || !(mid.scale > 0.0)) return std::nullopt;
       f = Form::Control(basis.num_controls++, mid.scale);
       basis.middle.push_back(d.GridIndex(i, 2 * k + 1));
+      basis.at_knot.push_back(0);
       basis.scale.push_back(mid.scale);
     }
   }
+  add_free_boundary(1);
   // Knot k of piece i (k = 0..K), in b.
   std::vector<Form> knot(static_cast<size_t>(m * (K + 1)));
   const auto knot_at = [&](int i, int k) -> Form& { return knot[static_cast<size_t>(i * (K + 1) + k)]; };
@@ -154,6 +171,12 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
       const bool piece_start = k == 0, piece_end = k == K;
       if ((piece_start || piece_end) && g.var < 0) {
         f = Form::Constant(g.fixed);
+        continue;
+      }
+      if ((i == 0 && piece_start) || (i == m - 1 && piece_end)) {
+        // A boundary whose tangent vanishes: b fixed by the acceleration, or free.
+        const int end = piece_start ? 0 : 1;
+        f = boundary_b[end] ? Form::Constant(*boundary_b[end]) : free_boundary[end];
         continue;
       }
       if (piece_start) continue;  // a shared value at a joint: set with the previous piece's end

@@ -234,9 +234,11 @@ double LinearizationFloor(const std::vector<double>& linearization);
 // The control values of a jerk-limited discretization (ControlBasis; control_basis.cpp), from its
 // shapes, cell edges, grid values and joints, with the sddot that a boundary acceleration fixes at
 // the start and the end (none where it fixes none) and b in a rest cell's middle over b at its
-// far end. Checked against every equality row of d; none when a case is not covered.
+// far end. A boundary where the tangent vanishes has b fixed by its acceleration instead
+// (boundary_b) and sddot free. Checked against every equality row of d; none when a case is not
+// covered.
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
                                               const std::optional<double> (&boundary_sddot)[2],
-                                              double rest_middle);
+                                              const std::optional<double> (&boundary_b)[2], double rest_middle);
 
 }  // namespace timeopt::internal

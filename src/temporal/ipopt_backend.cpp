@@ -566,6 +566,8 @@ class IpoptTemporalSolver final : public TemporalSolver {
     result->solve_time_seconds = Seconds(solve_start, Clock::now());
     Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app.Statistics();
     if (Ipopt::IsValid(stats)) result->iterations = stats->IterationCount();
+    result->method = "ipopt";
+    result->rows = static_cast<int>(d.rows.size() + d.cubic_rows.size() + d.cone_rows.size());
 
     switch (status) {
       case Ipopt::Solve_Succeeded:

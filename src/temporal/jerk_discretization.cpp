@@ -119,6 +119,8 @@ struct JerkContext {
   internal::JerkTemplates* templates = nullptr;
   // sddot at the start and the end where the boundary acceleration fixes it (AddBoundaryAcceleration).
   std::optional<double> boundary_sddot[2];
+  // b at the start and the end where the boundary acceleration fixes b itself (a vanishing tangent).
+  std::optional<double> boundary_b[2];
 
   // The half-grid index of half point j of piece i.
   int Half(int piece, int j) const { return d.GridIndex(piece, j); }
@@ -512,6 +514,7 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
   }
   c.row.Add(g, 1.0);
   c.row.Finish(LinearRow::Kind::kBoundaryAcceleration, b, b, [&] { return field; });
+  c.boundary_b[end ? 1 : 0] = b;
 }
 
 // Cell edges of a piece in [0, 1]: K cells, with a rest cell at an end that is a rest point sized
@@ -791,7 +794,7 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   AddBoundaryAcceleration(c, true);
   if (problem.prune_redundant_rows) internal::KeepTightestUpperBounds(&d);
   if (!d.infeasible_reason && d.num_vars > 0) {
-    d.controls = internal::BuildControlBasis(problem, d, c.boundary_sddot, kRestMiddle);
+    d.controls = internal::BuildControlBasis(problem, d, c.boundary_sddot, c.boundary_b, kRestMiddle);
   }
   return d;
 }

@@ -66,6 +66,11 @@ constexpr double kStructuredGap = 1e-7;
 // The structured path's certified guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
+// A control whose essential rows bound it at more than kLooseBound times its value keeps all its
+// rows in a working set (see SolveStructuredScp). On the default plan (27 pieces, K = 20) 10
+// kept 1.9 x the rows of 1000 in the settled solves; without the rule a solve ran off to infinite
+// speed at the curve's ends (tangent and curvature vanish there) and hit the iteration limit.
+constexpr double kLooseBound = 1000.0;
 
 // Upper bounds of d's free values: the velocity limit at each one's own point. The certified
 // velocity rows imply them (they bound f'^2 b on whole cells, and b at a cell's middle point is
@@ -197,17 +202,30 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       return false;
     }
   }
+  // The upper bound of each control that the essential rows give alone (with y >= 0). A control
+  // whose bound is far above its value (kLooseBound times) is held only by rows a working set
+  // may leave out (a boundary value where the tangent and the curvature vanish is held only by
+  // its cell's jerk rows), and a solve without them runs off towards infinite speed there: the
+  // working set keeps every row over such a control.
+  std::vector<double> essential_bound(static_cast<size_t>(base.n), std::numeric_limits<double>::infinity());
+  for (size_t r = 0; r < base.rows.size(); ++r) {
+    const internal::BandedRow& row = base.rows[r];
+    if (!base.essential[r] || !(base.h[r] > 0.0)) continue;
+    bool nonnegative = true;
+    for (int t = 0; t < row.count; ++t) nonnegative = nonnegative && row.v[t] >= 0.0;
+    if (!nonnegative) continue;
+    for (int t = 0; t < row.count; ++t) {
+      double& bound = essential_bound[static_cast<size_t>(row.first + t)];
+      if (row.v[t] > 0.0) bound = std::min(bound, base.h[r] / row.v[t]);
+    }
+  }
   base.kind = static_cast<int>(LinearRow::Kind::kJerk);  // the rows added below
   for (const internal::BandedRow& row : base.rows) base.bandwidth = std::max(base.bandwidth, row.count - 1);
   const size_t static_rows = base.rows.size();
   out->build_seconds += SecondsSince(start);
-  // The first start: the control values of the guess (P1 = (4 b_mid - b_start - b_end) / 2).
+  // The first start: the control values of the guess.
   std::vector<double> y(static_cast<size_t>(base.n));
-  for (int v = 0; v < base.n; ++v) {
-    const size_t g = static_cast<size_t>(d.controls->middle[static_cast<size_t>(v)]);
-    y[static_cast<size_t>(v)] = 0.5 * (4.0 * linearization[g] - linearization[g - 1] - linearization[g + 1]) /
-                                d.controls->scale[static_cast<size_t>(v)];
-  }
+  for (int v = 0; v < base.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
   internal::BandedProblem p = base;
@@ -237,11 +255,22 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     const size_t h = out->history.size();
     const bool settled = h < 2 || std::abs(out->history[h - 1] - out->history[h - 2]) <= kWorkingSetSettled * out->history[h - 1];
     const double fraction = h == 0 ? kGuessFraction : settled ? kWorkingSetFraction : kUnsettledFraction;
+    std::vector<char> loose(static_cast<size_t>(p.n), 0);
+    for (int c = 0; c < p.n; ++c) {
+      loose[static_cast<size_t>(c)] = essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
+    }
+    const auto over_loose = [&](const internal::BandedRow& row) {
+      for (int t = 0; t < row.count; ++t) {
+        if (loose[static_cast<size_t>(row.first + t)]) return true;
+      }
+      return false;
+    };
     std::vector<char> keep(p.rows.size());
     // The first solve starts from the jerk-free guess, which says nothing of where the jerk rows
     // will bind: it takes all of them.
     for (size_t r = 0; r < p.rows.size(); ++r) {
-      keep[r] = p.essential[r] || (h == 0 && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r];
+      keep[r] = p.essential[r] || (h == 0 && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r] ||
+                over_loose(p.rows[r]);
     }
     out->build_seconds += SecondsSince(start);
     internal::BandedIpmOutcome outcome;
@@ -519,7 +548,6 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     if (d.controls && !d.infeasible_reason && d.num_vars > 0) BoundByPointVelocity(problem, &d);
     build_time += SecondsSince(start);
     if (d.controls && !d.infeasible_reason && d.num_vars > 0) {
-      const Clock::time_point g0 = Clock::now();
       // The guess on a coarser grid: it only chooses the first linearization, start and working
       // set.
       const std::vector<double> guess = certified_guess(d, std::max(2, (problem.cells_per_piece + 1) / kGuessCoarsening));
@@ -543,6 +571,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
           build_time += SecondsSince(finishing);
           if (r.status == TemporalStatus::kOptimal) {
             r.message = "tolerances met (structured path)";
+            r.method = "structured";
+            r.rows = scp.rows;
             history = scp.history;
             return finish(r);
           }

@@ -217,6 +217,8 @@ class SocpTemporalSolver final : public TemporalSolver {
         *x = std::move(b.x);
         result->status = TemporalStatus::kOptimal;
         result->message = "tolerances met (structured path)";
+        result->method = "structured";
+        result->rows = b.rows;
         result->reduced_accuracy = false;
         return;
       }
@@ -235,6 +237,8 @@ class SocpTemporalSolver final : public TemporalSolver {
 
     const conic::Result r = (d.jerk_limited ? jerk_solver_ : solver_).Solve(socp);
     result->iterations = banded_iterations + r.iterations;
+    result->method = "conic";
+    result->rows = static_cast<int>(d.rows.size());
     result->solve_time_seconds = banded_seconds + r.solve_time_seconds;
     switch (r.status) {
       case conic::Status::kOptimal:

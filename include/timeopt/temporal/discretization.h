@@ -136,8 +136,17 @@ struct ControlForm {
 struct ControlBasis {
   int num_controls = 0;
   std::vector<ControlForm> grid;  // b at every half-grid value (the discretization's grid)
-  std::vector<int> middle;        // per control: the half-grid index of its cell's middle
-  std::vector<double> scale;      // per control: P1 = scale * y
+  // Per control: the half-grid index of its cell's middle, or, for a boundary value that is free
+  // (tangent and curvature vanish there, so b is bound by nothing but its cells), that value's.
+  std::vector<int> middle;
+  std::vector<char> at_knot;      // per control: 1 for such a boundary value
+  std::vector<double> scale;      // per control: P1 (or the boundary b) = scale * y
+  // Control c of the profile with b at every half-grid value.
+  double FromGrid(int c, const std::vector<double>& b) const {
+    const size_t g = static_cast<size_t>(middle[static_cast<size_t>(c)]);
+    const double value = at_knot[static_cast<size_t>(c)] ? b[g] : 0.5 * (4.0 * b[g] - b[g - 1] - b[g + 1]);
+    return value / scale[static_cast<size_t>(c)];
+  }
 };
 
 struct TemporalDiscretization {

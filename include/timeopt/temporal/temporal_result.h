@@ -48,6 +48,13 @@ struct TemporalResult {
   TemporalStatus status = TemporalStatus::kNumericalError;
   std::string message;
   std::string solver;            // "socp" or "ipopt"
+  // The path that answered: "structured" (the SOCP backend's banded interior-point method),
+  // "conic" (its general conic solver), "ipopt" (Ipopt, also when the SOCP backend fell back to
+  // it), or empty when presolve decided without a solve.
+  std::string method;
+  // Inequality rows of the last convex solve (a working set when the sequential convex programme
+  // leaves rows out), for benchmarks.
+  int rows = 0;
   double total_time = 0.0;       // T, seconds
   double objective = 0.0;        // J = T + rho sum a^2 ds
   std::vector<double> piece_durations;  // seconds
@@ -69,9 +76,11 @@ struct TemporalResult {
   std::optional<double> min_thrust_ratio;
   std::optional<double> max_tilt_ratio;
   // Jerk-limited mode: the largest |jerk_axis| / max_jerk_axis on the same dense check (0
-  // otherwise), the number of convex solves of the sequential convex programme (the first one
-  // jerk-free), and T after each of them (the first one not jerk-feasible; each later one is).
-  // The Ipopt backend solves the exact, non-convex jerk rows once: scp_iterations 0, no history.
+  // otherwise), the number of convex solves of the sequential convex programme, and T after each
+  // of them. On the structured path every solve is jerk-feasible (the first is linearized at the
+  // jerk-free certified optimum); on the general path the first one is jerk-free (not
+  // jerk-feasible) and each later one is. The Ipopt backend solves the exact, non-convex jerk rows
+  // once: scp_iterations 0, no history.
   // Why the problem is infeasible (status kInfeasible): cause "boundary_speed" (a boundary speed
   // above a speed limit), "braking" (a start too fast to brake for a slower part ahead; where names
   // the arc length at which braking fails), "end_speed" (an end speed that cannot be reached),
