@@ -292,86 +292,93 @@ class BandedIpm {
         }
       }
     }
+    // One pass over the rows: r_p, G'z into r_d, and the figures Converged reads.
     rd_ = grad_;
     rp_.resize(static_cast<size_t>(m_));
+    rp_max_ = 0.0;
+    h_max_ = 1.0;
+    gap_ = 0.0;
     for (const RowRun& run : runs_) {
       double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
-        for (int t = 0; t < W; ++t) acc[t] += row.v[t] * z_[static_cast<size_t>(r)];
-        rp_[static_cast<size_t>(r)] = Dot(row, x_) + s_[static_cast<size_t>(r)] - h_[static_cast<size_t>(r)];
+        const size_t i = static_cast<size_t>(r);
+        for (int t = 0; t < W; ++t) acc[t] += row.v[t] * z_[i];
+        const double rp = Dot(row, x_) + s_[i] - h_[i];
+        rp_[i] = rp;
+        rp_max_ = std::max(rp_max_, std::abs(rp));
+        h_max_ = std::max(h_max_, std::abs(h_[i]));
+        gap_ += s_[i] * z_[i];
       }
       for (int t = 0; t < run.span; ++t) rd_[static_cast<size_t>(run.first + t)] += acc[t];
     }
   }
 
   bool Converged() const {
-    double rp = 0.0, rd = 0.0, hmax = 1.0, gmax = 1.0, gap = 0.0;
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      rp = std::max(rp, std::abs(rp_[r]));
-      hmax = std::max(hmax, std::abs(h_[r]));
-      gap += s_[r] * z_[r];
-    }
+    double rd = 0.0, gmax = 1.0;
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) {
       rd = std::max(rd, std::abs(rd_[v]));
       gmax = std::max(gmax, std::abs(grad_[v]));
     }
-    return rp <= settings_.tolerance * hmax && rd <= settings_.tolerance * gmax &&
-           gap <= settings_.gap_tolerance * std::abs(objective_);
+    return rp_max_ <= settings_.tolerance * h_max_ && rd <= settings_.tolerance * gmax &&
+           gap_ <= settings_.gap_tolerance * std::abs(objective_);
   }
 
-  // Solves the Newton system for the complementarity target rc into dx, ds, dz; returns the
-  // largest step in (0, inf] that keeps s and z >= 0.
-  double Direction(const std::vector<double>& rc) {
-    dx_.assign(static_cast<size_t>(n_ + W), 0.0);
-    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
-    for (const RowRun& run : runs_) {
-      double acc[W] = {};
-      for (int r = run.begin; r < run.end; ++r) {
-        const BandedRow& row = rows_[static_cast<size_t>(r)];
-        const size_t i = static_cast<size_t>(r);
-        const double t = (rc[i] - z_[i] * rp_[i]) * inv_s_[i];
-        for (int k = 0; k < W; ++k) acc[k] += row.v[k] * t;
-      }
-      for (int k = 0; k < run.span; ++k) dx_[static_cast<size_t>(run.first + k)] += acc[k];
-    }
+  // After dx_ holds the right-hand side: solves for dx, then ds = -r_p - G dx and
+  // dz = (z o (r_p + G dx) - rc) / s, with rc = s o z + shift (shift_ == nullptr: rc = s o z, the
+  // predictor) into ds_, dz_. Returns the largest step in (0, inf] that keeps s and z >= 0, as
+  // 1 / max(-ds / s, -dz / z) (multiplications, not a division per row), and, for the predictor,
+  // the sums that give mu at any step (MuAfter).
+  double Direction(const std::vector<double>* rc) {
     factor_.Solve(dx_);
     ds_.resize(static_cast<size_t>(m_));
     dz_.resize(static_cast<size_t>(m_));
-    // The largest step as 1 / max(-ds / s, -dz / z) (multiplications, not a division per row).
-    double inverse = 0.0;
+    double inverse = 0.0, s1 = 0.0, s2 = 0.0;
     for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
       const double gdx = Dot(rows_[r], dx_);
       const double ds = -rp_[r] - gdx;
-      const double dz = (z_[r] * (rp_[r] + gdx) - rc[r]) * inv_s_[r];
+      const double target = rc == nullptr ? s_[r] * z_[r] : (*rc)[r];
+      const double dz = (z_[r] * (rp_[r] + gdx) - target) * inv_s_[r];
       ds_[r] = ds;
       dz_[r] = dz;
       inverse = std::max(inverse, std::max(-ds * inv_s_[r], -dz * inv_z_[r]));
+      s1 += s_[r] * dz + z_[r] * ds;
+      s2 += ds * dz;
     }
+    sum_sdz_zds_ = s1;
+    sum_dsdz_ = s2;
     return inverse > 0.0 ? 1.0 / inverse : kInf;
   }
 
   bool Step() {
-    // M = grad^2 J + G' (Z / S) G, and mu.
+    // One pass: M = grad^2 J + G' (Z / S) G, mu, 1 / s, 1 / z, and the predictor's right-hand side
+    // -r_d + G' ((rc - z o r_p) / s) with rc = s o z, that is G' (z - z o r_p / s).
     factor_ = hess_;
+    dx_.assign(static_cast<size_t>(n_ + W), 0.0);
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
     double mu = 0.0;
     inv_s_.resize(static_cast<size_t>(m_));
     inv_z_.resize(static_cast<size_t>(m_));
     for (const RowRun& run : runs_) {
       double block[W][W] = {};  // lower triangle
+      double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
         const size_t i = static_cast<size_t>(r);
-        inv_s_[i] = 1.0 / s_[i];
+        const double is = 1.0 / s_[i];
+        inv_s_[i] = is;
         inv_z_[i] = 1.0 / z_[i];
-        const double w = z_[i] * inv_s_[i];
+        const double w = z_[i] * is;
         mu += s_[i] * z_[i];
+        const double t = z_[i] - w * rp_[i];
         for (int a = 0; a < W; ++a) {
           const double wa = w * row.v[a];
+          acc[a] += row.v[a] * t;
           for (int b = 0; b <= a; ++b) block[a][b] += wa * row.v[b];
         }
       }
       for (int a = 0; a < run.span; ++a) {
+        dx_[static_cast<size_t>(run.first + a)] += acc[a];
         for (int b = 0; b <= a; ++b) {
           if (block[a][b] != 0.0) factor_.At(run.first + a, run.first + b) += block[a][b];
         }
@@ -379,22 +386,30 @@ class BandedIpm {
     }
     mu /= m_;
     if (!factor_.Factor()) return false;
-    // Predictor.
-    rc_.resize(static_cast<size_t>(m_));
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) rc_[r] = s_[r] * z_[r];
-    const double alpha_aff = std::min(1.0, Direction(rc_));
-    double mu_aff = 0.0;
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      mu_aff += (s_[r] + alpha_aff * ds_[r]) * (z_[r] + alpha_aff * dz_[r]);
-    }
-    mu_aff /= m_;
+    // Predictor, and mu after its step from the sums Direction kept.
+    const double alpha_aff = std::min(1.0, Direction(nullptr));
+    const double mu_aff = (mu * m_ + alpha_aff * sum_sdz_zds_ + alpha_aff * alpha_aff * sum_dsdz_) / m_;
     const double ratio = std::max(0.0, mu_aff / mu);
     const double sigma = std::min(1.0, ratio * ratio * ratio);
-    // Corrector.
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) rc_[r] = s_[r] * z_[r] + ds_[r] * dz_[r] - sigma * mu;
-    const double alpha = std::min(1.0, kStepFraction * Direction(rc_));
-    for (double v : dx_) {
-      if (!std::isfinite(v)) return false;
+    // Corrector: rc = s o z + ds_a o dz_a - sigma mu, and its right-hand side in one pass.
+    rc_.resize(static_cast<size_t>(m_));
+    dx_.assign(static_cast<size_t>(n_ + W), 0.0);
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
+    for (const RowRun& run : runs_) {
+      double acc[W] = {};
+      for (int r = run.begin; r < run.end; ++r) {
+        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        const size_t i = static_cast<size_t>(r);
+        const double rc = s_[i] * z_[i] + ds_[i] * dz_[i] - sigma * mu;
+        rc_[i] = rc;
+        const double t = (rc - z_[i] * rp_[i]) * inv_s_[i];
+        for (int k = 0; k < W; ++k) acc[k] += row.v[k] * t;
+      }
+      for (int k = 0; k < run.span; ++k) dx_[static_cast<size_t>(run.first + k)] += acc[k];
+    }
+    const double alpha = std::min(1.0, kStepFraction * Direction(&rc_));
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) {
+      if (!std::isfinite(dx_[v])) return false;
     }
     if (!(alpha > 0.0)) return false;
     for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
@@ -421,6 +436,8 @@ class BandedIpm {
   std::vector<double> x_, s_, z_;
   std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_, inv_z_;
   double objective_ = 0.0;
+  double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from Evaluate
+  double sum_sdz_zds_ = 0.0, sum_dsdz_ = 0.0;     // from Direction
   Band hess_, factor_;
 };
 
