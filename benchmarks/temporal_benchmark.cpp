@@ -133,7 +133,7 @@ void BM_SocpJerkLimited(benchmark::State& state) {
   p.limits.max_jerk = Eigen::Vector3d::Constant(10.0);
   RunProblem(state, TemporalBackend::kSocp, p);
 }
-BENCHMARK(BM_SocpJerkLimited)->Args({10, 50})->Args({5, 30})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SocpJerkLimited)->Args({10, 50})->Args({20, 50})->Args({10, 200})->Args({5, 30})->Unit(benchmark::kMillisecond);
 
 // The quadrotor's own limits (issue 20) on the same curves, no per-axis limits: max_speed 3,
 // thrust in [g - 3, g + 3], tilt 0.5 rad. Third argument: 0 paper rows, 1 certified (cones on every

@@ -56,6 +56,7 @@ struct BandedIpmOutcome {
   std::string message;
   std::vector<double> x;  // d.num_vars values when optimal
   std::vector<double> y;  // the unknowns when optimal
+  std::vector<double> z;  // the rows' multipliers when optimal
 };
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings);
@@ -95,6 +96,11 @@ struct BandedProblem {
   // Per row: 1 for the rows a working set always keeps (the bounds -y <= 0 and x <= var_upper,
   // rows with h <= 0), which keep every unknown bounded whatever else is left out.
   std::vector<char> essential;
+  // Per row: an identity that survives KeepRows and a new linearization (the multiplier of a row
+  // in one solve starts the next; see SolveBandedProblem). AddRow and AppendRow give next_id, or
+  // the row's index when next_id < 0.
+  std::vector<int> id;
+  int next_id = -1;
   int kind = -1;  // the kind AddRow gives its rows
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
@@ -107,6 +113,16 @@ struct BandedProblem {
   // Appends row . y <= bound, scaled so that the bound is +-1 or 0 (a row without terms: false
   // when it is violated, else dropped).
   bool AppendRow(BandedRow row, double bound);
+  // The three consecutive grid values g0, g0 + 1, g0 + 2 (a jerk-limited cell) as forms on one
+  // window of unknowns, so that a row over them maps to the unknowns by a 3 x kMaxRowSpan product.
+  struct CellMap {
+    int first = 0, count = 0;
+    double m[3][kMaxRowSpan] = {};
+    double constant[3] = {};
+  };
+  bool MapCell(int g0, CellMap* map) const;
+  // Appends sum_j coef[j] b_{g0 + j} <= bound through the cell's map (as AddGridRow).
+  bool AddCellRow(const CellMap& map, const double* coef, double bound);
   // Keeps only the rows whose flag is set (the first n always), in order.
   void KeepRows(const std::vector<char>& keep);
 };
@@ -115,8 +131,10 @@ struct BandedProblem {
 bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why);
 
 // Solves p from y0 (weighted with a uniform profile inside the rows that hold at 0; empty: that
-// profile alone). On kOptimal, x holds d's free values (through x_form) and y the unknowns.
+// profile alone). On kOptimal, x holds d's free values (through x_form), y the unknowns and z the
+// rows' multipliers. With `warm` (a multiplier per row id, NaN for none: a previous solve of a
+// nearby problem; empty: none yet), the start is y0 itself with those multipliers, re-centred.
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
-                                    const BandedIpmSettings& settings);
+                                    const BandedIpmSettings& settings, const std::vector<double>* warm = nullptr);
 
 }  // namespace timeopt::internal

@@ -194,10 +194,24 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   Clock::time_point start = Clock::now();
   internal::BandedProblem base;
   if (!internal::BuildBandedProblem(d, &base, &out->why)) return false;
+  // Every regular cell's grid values as forms on its window of control values, once (by g0).
+  std::vector<internal::BandedProblem::CellMap> cell_map(d.grid.size());
+  std::vector<char> mapped(d.grid.size(), 0);
+  // Appends sum_j coef[j] b_{g0 + j} <= 1 to q; false when it spans too many control values or is
+  // constant and violated.
+  const auto add_cell_row = [&](internal::BandedProblem& q, int g0, const double* coef) {
+    const size_t g = static_cast<size_t>(g0);
+    if (!mapped[g]) {
+      if (!base.MapCell(g0, &cell_map[g])) return false;
+      mapped[g] = 1;
+    }
+    if (cell_map[g].count > 0) return q.AddCellRow(cell_map[g], coef, 1.0);
+    const int grid[3] = {g0, g0 + 1, g0 + 2};
+    return q.AddGridRow(grid, coef, 3, 1.0);
+  };
   for (const internal::GridRow& row : templates.cell_rows) {
-    const int grid[3] = {row.g0, row.g0 + 1, row.g0 + 2};
     base.kind = static_cast<int>(row.kind);
-    if (!base.AddGridRow(grid, row.coef.data(), 3, 1.0)) {
+    if (!add_cell_row(base, row.g0, row.coef.data())) {
       out->why = "a row over more than four control values, or a constant one violated";
       return false;
     }
@@ -229,22 +243,25 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
   internal::BandedProblem p = base;
+  std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
   for (int n = 0; n < problem.max_scp_iterations; ++n) {
     start = Clock::now();
     p.rows.resize(static_rows);
     p.h.resize(static_rows);
     p.essential.resize(static_rows);
+    p.id.resize(static_rows);
     p.bandwidth = base.bandwidth;
     const double floor = internal::LinearizationFloor(linearization);
-    for (const internal::JerkRowTemplate& t : templates.jerk_rows) {
+    for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
+      const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
+      p.next_id = static_cast<int>(static_rows + ti);
       const double lb[3] = {linearization[static_cast<size_t>(t.g0)], linearization[static_cast<size_t>(t.g0) + 1],
                             linearization[static_cast<size_t>(t.g0) + 2]};
       const double bbar = internal::LinearizationPoint(lb, floor);
       const double ca = 2.0 * std::sqrt(bbar) / (3.0 * t.jmax), cb = 1.0 / (3.0 * bbar);
       const double coef[3] = {t.a[0] * ca + t.basis[0] * cb, t.a[1] * ca + t.basis[1] * cb, t.a[2] * ca + t.basis[2] * cb};
       if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) continue;  // holds for b >= 0
-      const int grid[3] = {t.g0, t.g0 + 1, t.g0 + 2};
-      if (!p.AddGridRow(grid, coef, 3, 1.0)) {
+      if (!add_cell_row(p, t.g0, coef)) {
         out->why = "a jerk row over more than four control values, or a constant one violated";
         return false;
       }
@@ -280,10 +297,16 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       w.KeepRows(keep);
       out->build_seconds += SecondsSince(start);
       start = Clock::now();
-      outcome = internal::SolveBandedProblem(w, y, settings);
+      // Every solve starts from the previous answer (the guess for the first) and the previous
+      // multipliers (none for the first).
+      outcome = internal::SolveBandedProblem(w, y, settings, &z_by_id);
       out->solve_seconds += SecondsSince(start);
       out->iterations += outcome.iterations;
       out->rows = outcome.rows;
+      if (outcome.kind == internal::BandedIpmOutcome::Kind::kOptimal) {
+        z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
+        for (size_t r = 0; r < w.id.size(); ++r) z_by_id[static_cast<size_t>(w.id[r])] = outcome.z[r];
+      }
       const bool all = std::count(keep.begin(), keep.end(), 1) == static_cast<std::ptrdiff_t>(keep.size());
       if (outcome.kind != internal::BandedIpmOutcome::Kind::kOptimal) {
         if (all) {
