@@ -267,11 +267,13 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       }
     }
     for (size_t r = static_rows; r < p.rows.size(); ++r) p.bandwidth = std::max(p.bandwidth, p.rows[r].count - 1);
-    // The working set: the essential rows and those near their bound at the start (see
-    // WorkingSet; the same fractions).
+    // The working set: the essential rows and those near their bound at the start: kGuessFraction
+    // for the first solve, kWorkingSetFraction after it. (The general path takes
+    // kUnsettledFraction while T still moves by more than kWorkingSetSettled; from a warm start
+    // the tighter set costs fewer iterations: on the default plan, the third solve took 25,585 rows
+    // and 15 iterations with it, 9,246 and 12 without.)
     const size_t h = out->history.size();
-    const bool settled = h < 2 || std::abs(out->history[h - 1] - out->history[h - 2]) <= kWorkingSetSettled * out->history[h - 1];
-    const double fraction = h == 0 ? kGuessFraction : settled ? kWorkingSetFraction : kUnsettledFraction;
+    const double fraction = h == 0 ? kGuessFraction : kWorkingSetFraction;
     std::vector<char> loose(static_cast<size_t>(p.n), 0);
     for (int c = 0; c < p.n; ++c) {
       loose[static_cast<size_t>(c)] = essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
