@@ -2,7 +2,7 @@
 // seed 1; no files needed): front-end search, spatial optimization (both formulations) and the
 // whole plan, over 16 fixed random start/goal pairs at 1.5 m height cycled through the
 // iterations. The forest_gen evaluation with success rates and percentiles is
-// experiments/planner_forest.cpp.
+// experiments/planner_forest.cpp. BM_PlanForest100: one long plan through a 100 x 100 x 4 m forest.
 
 #include <memory>
 #include <random>
@@ -95,5 +95,28 @@ void BM_Plan(benchmark::State& state) {
   state.counters["failures"] = static_cast<double>(failures);
 }
 BENCHMARK(BM_Plan)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// A 100 m plan: a 100 x 100 x 4 m forest at 0.1 m (0.05 trees/m^2, seed 3; as `timeopt map
+// generate forest --bounds 0 0 0 100 100 4 --density 0.05 --seed 3`), from (5, 5, 1.5) to (95, 95,
+// 1.5). Its distance field (40 million voxels, ~360 MB) is built once. Arg 0 without a jerk limit,
+// 1 the planner's default. Counters: the temporal stage's share (temporal_ms) and T.
+void BM_PlanForest100(benchmark::State& state) {
+  static const std::unique_ptr<Esdf> esdf = [] {
+    ForestOptions forest;
+    forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(100, 100, 4));
+    forest.density = 0.05;
+    forest.seed = 3;
+    return std::make_unique<Esdf>(GenerateForest(forest));
+  }();
+  Planner planner(*esdf);
+  PlannerOptions options;
+  if (state.range(0) == 0) options.limits.max_jerk.reset();
+  PlanResult r;
+  for (auto _ : state) r = planner.Plan(Eigen::Vector3d(5, 5, 1.5), Eigen::Vector3d(95, 95, 1.5), options);
+  if (!r.is_success()) state.SkipWithError(r.message.c_str());
+  state.counters["temporal_ms"] = r.times.temporal_ms;
+  state.counters["T"] = r.temporal.total_time;
+}
+BENCHMARK(BM_PlanForest100)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
