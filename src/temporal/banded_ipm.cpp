@@ -611,22 +611,6 @@ bool BandedProblem::AddGridRow(const int* grid, const double* coef, int count, d
   return MapGridRow(grid, coef, count, &row, &constant) && AppendRow(row, bound - constant);
 }
 
-void BandedProblem::KeepRows(const std::vector<char>& keep) {
-  size_t out = 0;
-  for (size_t r = 0; r < rows.size(); ++r) {
-    if (!keep[r] && r >= static_cast<size_t>(n)) continue;
-    rows[out] = rows[r];
-    h[out] = h[r];
-    essential[out] = essential[r];
-    id[out] = id[r];
-    ++out;
-  }
-  rows.resize(out);
-  h.resize(out);
-  essential.resize(out);
-  id.resize(out);
-}
-
 bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why) {
   BandedProblem& p = *out;
   p = BandedProblem();

@@ -96,7 +96,7 @@ struct BandedProblem {
   // Per row: 1 for the rows a working set always keeps (the bounds -y <= 0 and x <= var_upper,
   // rows with h <= 0), which keep every unknown bounded whatever else is left out.
   std::vector<char> essential;
-  // Per row: an identity that survives KeepRows and a new linearization (the multiplier of a row
+  // Per row: an identity that survives a working set and a new linearization (the multiplier of a row
   // in one solve starts the next; see SolveBandedProblem). AddRow and AppendRow give next_id, or
   // the row's index when next_id < 0.
   std::vector<int> id;
@@ -123,8 +123,6 @@ struct BandedProblem {
   bool MapCell(int g0, CellMap* map) const;
   // Appends sum_j coef[j] b_{g0 + j} <= bound through the cell's map (as AddGridRow).
   bool AddCellRow(const CellMap& map, const double* coef, double bound);
-  // Keeps only the rows whose flag is set (the first n always), in order.
-  void KeepRows(const std::vector<char>& keep);
 };
 
 // The structured problem of d (rows, cells and forms); false (not applicable) with a reason.

@@ -243,6 +243,11 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
   internal::BandedProblem p = base;
+  internal::BandedProblem w = base;  // a solve's working set of p
+  p.rows.reserve(static_rows + templates.jerk_rows.size());
+  p.h.reserve(p.rows.capacity());
+  p.essential.reserve(p.rows.capacity());
+  p.id.reserve(p.rows.capacity());
   std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
   for (int n = 0; n < problem.max_scp_iterations; ++n) {
     start = Clock::now();
@@ -295,8 +300,19 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     internal::BandedIpmOutcome outcome;
     for (int round = 0;; ++round) {
       start = Clock::now();
-      internal::BandedProblem w = p;
-      w.KeepRows(keep);
+      // The working set's rows, into w (the same unknowns, cells and forms as p).
+      w.rows.clear();
+      w.h.clear();
+      w.essential.clear();
+      w.id.clear();
+      for (size_t r = 0; r < p.rows.size(); ++r) {
+        if (!keep[r]) continue;
+        w.rows.push_back(p.rows[r]);
+        w.h.push_back(p.h[r]);
+        w.essential.push_back(p.essential[r]);
+        w.id.push_back(p.id[r]);
+      }
+      w.bandwidth = p.bandwidth;
       out->build_seconds += SecondsSince(start);
       start = Clock::now();
       // Every solve starts from the previous answer (the guess for the first) and the previous
