@@ -332,8 +332,9 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
     const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
     const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
     SmallPoly vel[3], acc[3], jerk[3];
+    const SmallPoly q2 = Multiply(q, q);
     for (int j = 0; j < 3; ++j) {
-      vel[j] = Multiply(Multiply(q, q), Basis(j));
+      vel[j] = Multiply(q2, Basis(j));
       acc[j] = Padded(Multiply(q, BasisDerivative(j)) / (2.0 * ds), 0);
       const SmallPoly curvature = Multiply(p2, Basis(j));
       const int size = static_cast<int>(std::max(acc[j].size(), curvature.size()));
@@ -350,33 +351,34 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       }
     }
     // Every row of one kind in a common degree, converted to Bernstein form per grid value.
-    const auto emit = [&](SmallPoly (&polys)[3], double sign, double add_b_weight, double bound,
-                          LinearRow::Kind kind) {
+    // The rows sign * polys <= bound (both signs when two_sided) on the cell's Bernstein
+    // coefficients, converted once.
+    const auto emit = [&](SmallPoly (&polys)[3], bool two_sided, double bound, LinearRow::Kind kind) {
       int size = 0;
       for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
       size = std::max(size, 3);
       SmallPoly bern[3];
-      for (int j = 0; j < 3; ++j) {
-        SmallPoly p = sign * Padded(polys[j], size);
-        if (add_b_weight != 0.0) p += add_b_weight * Padded(Basis(j), size);
-        bern[j] = c.bernstein.Convert(p);
-      }
-      for (int i = 0; i < size; ++i) {
-        if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;  // holds for b >= 0
-        if (c.templates != nullptr) {
-          // Over the cell's grid values, for the structured path (DiscretizeJerkLimitedTemplates).
-          internal::GridRow row;
-          row.g0 = g0;
-          row.kind = kind;
-          for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = bern[j](i) / bound;
-          c.templates->cell_rows.push_back(row);
-          continue;
+      for (int j = 0; j < 3; ++j) bern[j] = c.bernstein.Convert(Padded(polys[j], size));
+      for (const double sign : {1.0, -1.0}) {
+        if (sign < 0.0 && !two_sided) break;
+        for (int i = 0; i < size; ++i) {
+          const double w[3] = {sign * bern[0](i), sign * bern[1](i), sign * bern[2](i)};
+          if (w[0] <= 0.0 && w[1] <= 0.0 && w[2] <= 0.0) continue;  // holds for b >= 0
+          if (c.templates != nullptr) {
+            // Over the cell's grid values, for the structured path (DiscretizeJerkLimitedTemplates).
+            internal::GridRow row;
+            row.g0 = g0;
+            row.kind = kind;
+            for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = w[j] / bound;
+            c.templates->cell_rows.push_back(row);
+            continue;
+          }
+          for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, w[j] / bound);
+          c.row.Finish(kind, -kInf, 1.0, [&] {
+            return std::string("a limit on axis ") + kAxisNames[a] + " in piece " +
+                   std::to_string(piece) + " cell " + std::to_string(k);
+          });
         }
-        for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / bound);
-        c.row.Finish(kind, -kInf, 1.0, [&] {
-          return std::string("a limit on axis ") + kAxisNames[a] + " in piece " +
-                 std::to_string(piece) + " cell " + std::to_string(k);
-        });
       }
     };
     SmallPoly part_basis[3];
@@ -396,10 +398,9 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
         });
       }
     };
-    if (std::isfinite(vmax2)) emit(vel, 1.0, 0.0, vmax2, LinearRow::Kind::kVelocity);
+    if (std::isfinite(vmax2)) emit(vel, false, vmax2, LinearRow::Kind::kVelocity);
     if (std::isfinite(amax)) {
-      emit(acc, 1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
-      emit(acc, -1.0, 0.0, amax, LinearRow::Kind::kAcceleration);
+      emit(acc, true, amax, LinearRow::Kind::kAcceleration);
     }
     if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, jmax);
     if (mode == JerkRows::kNone && c.templates != nullptr) {
@@ -658,6 +659,10 @@ double LinearizationFloor(const std::vector<double>& linearization) {
 
 TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates) {
   *templates = JerkTemplates();
+  // About 45 velocity and acceleration rows and 18 jerk rows per cell on a cubic curve.
+  const size_t cells = static_cast<size_t>(problem.curve.num_pieces()) * static_cast<size_t>(problem.cells_per_piece);
+  templates->cell_rows.reserve(48 * cells);
+  templates->jerk_rows.reserve(18 * cells);
   return DiscretizeJerkLimitedImpl(problem, JerkRows::kNone, nullptr, templates);
 }
 

@@ -209,6 +209,11 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     const int grid[3] = {g0, g0 + 1, g0 + 2};
     return q.AddGridRow(grid, coef, 3, 1.0);
   };
+  const size_t rows = base.rows.size() + templates.cell_rows.size();
+  base.rows.reserve(rows);
+  base.h.reserve(rows);
+  base.essential.reserve(rows);
+  base.id.reserve(rows);
   for (const internal::GridRow& row : templates.cell_rows) {
     base.kind = static_cast<int>(row.kind);
     if (!add_cell_row(base, row.g0, row.coef.data())) {
