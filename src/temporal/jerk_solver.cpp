@@ -66,6 +66,9 @@ constexpr double kStructuredGap = 1e-7;
 // The structured path's certified guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
+// The structured programme stops early when its last two changes of T shrink at most at this rate
+// and the rest they predict is below scp_tolerance (see SolveStructuredScp).
+constexpr double kScpRate = 0.25;
 // A control whose essential rows bound it at more than kLooseBound times its value keeps all its
 // rows in a working set (see SolveStructuredScp). On the default plan (27 pieces, K = 20) 10
 // kept 1.9 x the rows of 1000 in the settled solves; without the rule a solve ran off to infinite
@@ -374,7 +377,18 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       out->x = std::move(outcome.x);
     }
     y = std::move(outcome.y);
-    if (out->history.size() >= 2 && std::abs(previous - T) <= problem.scp_tolerance * T) break;
+    const size_t k = out->history.size();
+    if (k >= 2 && std::abs(previous - T) <= problem.scp_tolerance * T) break;
+    // The programme converges geometrically (on the planner's curves T moves by 2.5%, 0.46%,
+    // 0.012%, then 1e-6): with the last two steps shrinking at a rate r <= kScpRate, what is left
+    // to gain is at most the last step times r / (1 - r) while the rate holds; stop when that is
+    // below scp_tolerance (it saved the confirming solve, one in five, on the planner benchmark).
+    if (k >= 3) {
+      const double last = std::abs(out->history[k - 1] - out->history[k - 2]);
+      const double before = std::abs(out->history[k - 2] - out->history[k - 3]);
+      const double rate = before > 0.0 ? last / before : 1.0;
+      if (rate <= kScpRate && last * rate / (1.0 - rate) <= problem.scp_tolerance * T) break;
+    }
   }
   return !out->x.empty();
 }
