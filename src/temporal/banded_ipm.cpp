@@ -10,7 +10,10 @@
 // and one step length for all three (J is not linear, so the primal and dual steps are not
 // separable as in a linear programme), 0.99 of the way to the boundary of s, z >= 0. The bound
 // rows x >= 0 start with r_p = 0 and keep it (their rows are linear), so x = s > 0 and J stays
-// finite at every iterate.
+// finite at every iterate. Over control values (jerk-limited mode) b is an affine form of y,
+// positive wherever the forms' signs imply it; where one has a negative constant (a start braking
+// hard), an iterate that reaches b <= 0 breaks the Newton system and the caller's general path
+// decides.
 
 #include "banded_ipm.h"
 
@@ -741,7 +744,8 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
 
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
                                     const BandedIpmSettings& settings, const std::vector<double>* warm) {
-  if (p.bandwidth > settings.max_bandwidth) {
+  // (A cell's two forms are read into a window of 2 kMaxRowSpan values in Evaluate.)
+  if (p.bandwidth > settings.max_bandwidth || p.bandwidth >= 2 * kMaxRowSpan) {
     BandedIpmOutcome out;
     out.message = "half-bandwidth " + std::to_string(p.bandwidth);
     return out;

@@ -236,6 +236,8 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         case CellShape::kRestEnd:
           ok = ok && middle.Add(a, rest_middle);
           break;
+        case CellShape::kLinear:  // not a shape of the jerk-limited grid
+          return std::nullopt;
       }
       ok = ok && ToControlForm(a, &basis.grid[static_cast<size_t>(d.GridIndex(i, 2 * k))]) &&
            ToControlForm(middle, &basis.grid[static_cast<size_t>(d.GridIndex(i, 2 * k + 1))]) &&
@@ -265,6 +267,53 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   for (const ControlForm* f : of_var) {
     if (f == nullptr) return std::nullopt;
   }
+  // Every grid value that shares a free value (a joint) is the same form in x: b_g / scale_g.
+  const auto same = [](const ControlForm& a, double sa, const ControlForm& b, double sb) {
+    double size = std::abs(a.constant / sa);
+    for (int t = 0; t < a.count; ++t) size = std::max(size, std::abs(a.coef[static_cast<size_t>(t)] / sa));
+    const double tolerance = 1e-12 * std::max(size, 1e-300);
+    if (std::abs(a.constant / sa - b.constant / sb) > tolerance) return false;
+    const int lo = std::min(a.count > 0 ? a.first : b.first, b.count > 0 ? b.first : a.first);
+    const int hi = std::max(a.first + a.count, b.first + b.count);
+    for (int c = lo; c < hi; ++c) {
+      const double ca = c >= a.first && c < a.first + a.count ? a.coef[static_cast<size_t>(c - a.first)] / sa : 0.0;
+      const double cb = c >= b.first && c < b.first + b.count ? b.coef[static_cast<size_t>(c - b.first)] / sb : 0.0;
+      if (std::abs(ca - cb) > tolerance) return false;
+    }
+    return true;
+  };
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    if (v.var < 0) continue;
+    if (!same(basis.grid[g], v.scale, *of_var[static_cast<size_t>(v.var)], var_scale[static_cast<size_t>(v.var)])) {
+      return std::nullopt;
+    }
+  }
+  // Every control is read back from the forms (ControlBasis::FromGrid): the map from y to b is
+  // one to one, so no two controls describe the same profile.
+  for (int c = 0; c < basis.num_controls; ++c) {
+    const size_t g = static_cast<size_t>(basis.middle[static_cast<size_t>(c)]);
+    Form read;
+    const auto add = [&](size_t grid, double w) {
+      const ControlForm& f = basis.grid[grid];
+      read.constant += w * f.constant;
+      for (int t = 0; t < f.count; ++t) ok = ok && read.Add(Form::Control(f.first + t, f.coef[static_cast<size_t>(t)]), w);
+    };
+    if (basis.at_knot[static_cast<size_t>(c)]) {
+      add(g, 1.0);
+    } else {
+      add(g, 2.0);
+      add(g - 1, -0.5);
+      add(g + 1, -0.5);
+    }
+    if (!ok) return std::nullopt;
+    const double scale = basis.scale[static_cast<size_t>(c)];
+    if (std::abs(read.constant) > 1e-9 * scale) return std::nullopt;
+    for (int t = 0; t < read.n; ++t) {
+      const auto& [control, coef] = read.terms[static_cast<size_t>(t)];
+      if (std::abs(coef - (control == c ? scale : 0.0)) > 1e-9 * scale) return std::nullopt;
+    }
+  }
   int equalities = 0;
   for (const LinearRow& row : d.rows) {
     if (row.lower != row.upper) continue;
@@ -288,8 +337,10 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
       if (std::abs(sum.terms[static_cast<size_t>(t)].second) > tolerance) return std::nullopt;
     }
   }
-  // As many controls as the equalities leave free: the basis spans every profile of the grid.
-  if (basis.num_controls + equalities < d.num_vars) return std::nullopt;
+  // As many controls as the equalities leave free: with the controls independent (above) and the
+  // equality rows too (each fixes a new value along the path), the basis spans every profile of
+  // the grid. A count that differs either way leaves the problem to the general path.
+  if (basis.num_controls + equalities != d.num_vars) return std::nullopt;
   return basis;
 }
 

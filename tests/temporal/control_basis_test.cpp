@@ -244,6 +244,9 @@ TEST(ControlBasis, StructuredAndGeneralPathsAgree) {
     EXPECT_EQ(structured.method, "structured") << structured.message;
     EXPECT_EQ(conic.method, "conic") << conic.message;
     EXPECT_NEAR(structured.total_time, conic.total_time, 2e-4 * conic.total_time);
+    // The same joints found (a property of the grid, not of the solve).
+    ASSERT_EQ(structured.joints.size(), conic.joints.size());
+    for (size_t j = 0; j < conic.joints.size(); ++j) EXPECT_EQ(structured.joints[j].type, conic.joints[j].type) << j;
     for (const TemporalResult* r : {&structured, &conic}) {
       SCOPED_TRACE(r->method);
       EXPECT_LE(r->max_jerk_ratio, 1.0 + 1e-6);
