@@ -18,6 +18,12 @@
 //
 // A backend whose jerk_rows() is kExact (Ipopt) instead solves the discretization with the exact,
 // non-convex jerk rows once: a local optimum of the same grid, for comparison.
+//
+// The SOCP backend first tries the structured path (SolveStructuredScp below): the same programme
+// over the control values of ControlBasis, which satisfy the equality rows by construction, with
+// banded interior-point solves, the first one linearized at the certified guess (no jerk-free
+// solve) and each later one warm-started. Only when it does not answer does the general path
+// above run.
 
 #include <algorithm>
 #include <chrono>
@@ -177,12 +183,13 @@ double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b
 }
 
 // The sequential convex programme on the structured path (banded_ipm.h), over d's control values:
-// d (the discretization without the regular cells' jerk rows) becomes a BandedProblem once; each
-// convex solve adds the jerk rows linearized at the previous answer (from `templates`, no new
-// discretization) and starts from that answer. The first linearization is `guess` (b at every
-// half-grid value, the jerk-free certified optimum). Every convex solve takes every row (rows that
-// another one implies dropped). False, with the reason in *why, when a solve does not end optimal:
-// the general path then decides, so statuses never depend on this one.
+// d (from DiscretizeJerkLimitedTemplates) and the velocity and acceleration templates become a
+// BandedProblem once; each convex solve adds the jerk rows linearized at the previous answer (from
+// `templates`, no new discretization) and starts from that answer and its multipliers. The first
+// linearization is `linearization` (b at every half-grid value: the jerk-free certified optimum).
+// Each solve gets a working set (see the loop); an answer that violates a row left out is solved
+// again with it. False, with the reason in *why, when a solve does not end optimal: the general
+// path then decides, so statuses never depend on this one.
 struct StructuredScp {
   double build_seconds = 0.0, solve_seconds = 0.0;
   int iterations = 0, rows = 0;
