@@ -78,7 +78,8 @@ struct TemporalResult {
   // Jerk-limited mode: the largest |jerk_axis| / max_jerk_axis on the same dense check (0
   // otherwise), the number of convex solves of the sequential convex programme, and T after each
   // of them. On the structured path every solve is jerk-feasible (the first is linearized at the
-  // jerk-free certified optimum); on the general path the first one is jerk-free (not
+  // jerk-free certified optimum) and the first, solved to looser tolerances as a linearization
+  // point only, is never the answer; on the general path the first one is jerk-free (not
   // jerk-feasible) and each later one is. The Ipopt backend solves the exact, non-convex jerk rows
   // once: scp_iterations 0, no history.
   // Why the problem is infeasible (status kInfeasible): cause "boundary_speed" (a boundary speed
