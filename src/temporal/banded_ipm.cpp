@@ -534,30 +534,6 @@ bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, dou
   return true;
 }
 
-bool BandedProblem::MapGridRow(const int* grid, const double* coef, int count, BandedRow* row, double* constant) const {
-  *row = BandedRow();
-  *constant = 0.0;
-  int lo = n, hi = -1;
-  for (int j = 0; j < count; ++j) {
-    const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
-    *constant += coef[j] * f.constant;
-    if (f.count > 0 && coef[j] != 0.0) {
-      lo = std::min(lo, f.first);
-      hi = std::max(hi, f.first + f.count - 1);
-    }
-  }
-  if (hi < lo) return true;
-  if (hi - lo + 1 > kMaxRowSpan) return false;
-  row->first = lo;
-  row->count = static_cast<short>(hi - lo + 1);
-  for (int j = 0; j < count; ++j) {
-    const ControlForm& f = grid_form[static_cast<size_t>(grid[j])];
-    if (coef[j] == 0.0) continue;
-    for (int t = 0; t < f.count; ++t) row->v[f.first + t - lo] += coef[j] * f.coef[static_cast<size_t>(t)];
-  }
-  return true;
-}
-
 bool BandedProblem::AppendRow(BandedRow row, double bound) {
   if (row.count == 0) return bound >= -1e-9;
   double scale = std::abs(bound);
@@ -606,12 +582,6 @@ bool BandedProblem::AddCellRow(const CellMap& map, const double* coef, double bo
   }
   // Terms that cancel leave the window as it is: a zero coefficient costs nothing.
   return AppendRow(row, bound);
-}
-
-bool BandedProblem::AddGridRow(const int* grid, const double* coef, int count, double bound) {
-  BandedRow row;
-  double constant = 0.0;
-  return MapGridRow(grid, coef, count, &row, &constant) && AppendRow(row, bound - constant);
 }
 
 bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why) {

@@ -105,11 +105,6 @@ struct BandedProblem {
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
-  // Appends the row sum_j coef[j] b_{grid[j]} <= bound over `count` grid values; as AddRow.
-  bool AddGridRow(const int* grid, const double* coef, int count, double bound);
-  // sum_j coef[j] b_{grid[j]} as *row . y + *constant (unscaled); false when it spans more than
-  // kMaxRowSpan unknowns.
-  bool MapGridRow(const int* grid, const double* coef, int count, BandedRow* row, double* constant) const;
   // Appends row . y <= bound, scaled so that the bound is +-1 or 0 (a row without terms: false
   // when it is violated, else dropped).
   bool AppendRow(BandedRow row, double bound);
@@ -121,7 +116,8 @@ struct BandedProblem {
     double constant[3] = {};
   };
   bool MapCell(int g0, CellMap* map) const;
-  // Appends sum_j coef[j] b_{g0 + j} <= bound through the cell's map (as AddGridRow).
+  // Appends sum_j coef[j] b_{g0 + j} <= bound through the cell's map (as AppendRow: false when it
+  // is constant and violated).
   bool AddCellRow(const CellMap& map, const double* coef, double bound);
 };
 

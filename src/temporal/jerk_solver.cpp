@@ -220,9 +220,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       if (!base.MapCell(g0, &cell_map[g])) return false;
       mapped[g] = 1;
     }
-    if (cell_map[g].count > 0) return q.AddCellRow(cell_map[g], coef, 1.0);
-    const int grid[3] = {g0, g0 + 1, g0 + 2};
-    return q.AddGridRow(grid, coef, 3, 1.0);
+    return q.AddCellRow(cell_map[g], coef, 1.0);
   };
   const size_t rows = base.rows.size() + templates.cell_rows.size();
   base.rows.reserve(rows);

@@ -99,6 +99,14 @@ std::vector<double> RandomControls(std::mt19937& rng, int n) {
   return y;
 }
 
+// A discretization with free values, no presolve verdict and a control basis.
+::testing::AssertionResult HasControls(const TemporalDiscretization& d) {
+  if (d.infeasible_reason) return ::testing::AssertionFailure() << "presolve: " << *d.infeasible_reason;
+  if (d.num_vars <= 0) return ::testing::AssertionFailure() << "no free values";
+  if (!d.controls) return ::testing::AssertionFailure() << "no control basis";
+  return ::testing::AssertionSuccess();
+}
+
 // The truth: the basis is built so that the equality rows (sddot continuity between cells and
 // across joints, the rest cells' shape, the boundary accelerations) hold identically in y, and a
 // fixed grid value is a constant form. So for any y, b = form(y) gives one x per free value (the
@@ -114,9 +122,7 @@ TEST(ControlBasis, EveryProfileOfTheControlsMeetsTheEqualityRows) {
   for (const NamedProblem& named : JerkProblems(24)) {
     SCOPED_TRACE(named.name);
     const TemporalDiscretization d = DiscretizeJerkLimited(named.problem, JerkRows::kNone);
-    ASSERT_FALSE(d.infeasible_reason) << *d.infeasible_reason;
-    ASSERT_GT(d.num_vars, 0);
-    ASSERT_TRUE(d.controls.has_value());
+    ASSERT_TRUE(HasControls(d));
     const ControlBasis& basis = *d.controls;
     ASSERT_GT(basis.num_controls, 0);
     ASSERT_EQ(basis.grid.size(), d.grid.size());
@@ -188,8 +194,7 @@ TEST(ControlBasis, SpansTheSameProfilesAsTheGrid) {
   for (const NamedProblem& named : JerkProblems(24)) {
     SCOPED_TRACE(named.name);
     const TemporalDiscretization d = DiscretizeJerkLimited(named.problem, JerkRows::kNone);
-    ASSERT_FALSE(d.infeasible_reason) << *d.infeasible_reason;
-    ASSERT_TRUE(d.controls.has_value());
+    ASSERT_TRUE(HasControls(d));
     const ControlBasis& basis = *d.controls;
     const size_t n = static_cast<size_t>(basis.num_controls);
     ASSERT_EQ(basis.middle.size(), n);
