@@ -17,7 +17,7 @@
 //
 // Problem i depends only on the seed and i, so a failure is reproduced by --first i --count 1;
 // --dump DIR also writes each problem as DIR/problem_<i>.json, the problem JSON of the CLI.
-// --known lists problems that fail for a documented reason (README, "Property sweep"): their
+// --known lists problems that fail for a documented reason (docs/sizes-and-errors.md, "Property sweep"): their
 // failures are printed as KNOWN and not counted, and one that passes is a failure, so that the
 // list only shrinks. Unresolved outcomes (no answer from either backend on the jerk-limited rows,
 // or an infeasible verdict that the other backend leaves without a verdict, stopped by its CPU
