@@ -54,6 +54,9 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
     for (int pair = 0; pair < 4; ++pair) {
       PlannerOptions options;
       options.robot_radius = 0.3;
+      // The spatial stage's default time budget (0.1 s) binds on a slow machine or under the
+      // sanitizers, and the curve then depends on the machine; the iteration limit alone does not.
+      options.spatial.max_solver_time_in_seconds = 60.0;
       Eigen::Vector3d start = FreePoint(*f.esdf, &rng, 0.5, 0.5, 3.0);
       Eigen::Vector3d goal = FreePoint(*f.esdf, &rng, 0.5, 7.0, 9.5);
       const PlanResult plan = planner.Plan(start, goal, options);
@@ -61,7 +64,9 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
       ASSERT_TRUE(plan.is_success()) << "seed " << seed << " pair " << pair << ": "
                                      << ToString(plan.status) << ": " << plan.message;
       ++successes;
-      EXPECT_GE(plan.min_clearance, options.robot_radius + options.clearance_check_margin);
+      // The planner's promise: the radius plus half a check step at the samples (a start or goal
+      // closer than that lowers it to its own clearance, which these free points exceed).
+      EXPECT_GE(plan.min_clearance, options.robot_radius + 0.5 * options.clearance_check_step / 8.0);
       // Dense check of the curve against the occupied voxels' cubes, 0.01 m steps in s-chords:
       // between samples the robot centre moves at most 0.005 m, the tolerance below.
       double smallest = 1e9;
