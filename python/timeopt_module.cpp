@@ -412,7 +412,7 @@ PYBIND11_MODULE(timeopt, m) {
           "A curve through (N, 3) waypoints: 'minjerk' (rest to rest, C4 inside) or 'cubic' (natural, C2).")
       .def_static(
           "load", [](const std::string& path) { return ReadCurveJson(path).curve; }, py::arg("path"),
-          "A curve from a curve JSON file (DESIGN.md).")
+          "A curve from a curve JSON file (docs/formats.md).")
       .def_property_readonly("num_pieces", &PiecewiseCurve::num_pieces)
       .def_property_readonly(
           "pieces",
@@ -444,11 +444,11 @@ PYBIND11_MODULE(timeopt, m) {
           py::arg("sigma"), py::arg("derivative") = 0,
           "f or its derivative in s at global parameters sigma in [0, num_pieces] (piece floor(sigma)): (N, 3).")
       .def("arc_length", [](const PiecewiseCurve& c) { return c.ArcLength(); }, "Arc length, metres.")
-      .def("to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of DESIGN.md.");
+      .def("to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.");
 
   // ---- temporal problem ----
   py::class_<TemporalProblem>(m, "TemporalProblem",
-                              "The temporal problem of DESIGN.md: a curve, limits, boundary velocities and accelerations, "
+                              "The temporal problem (docs/temporal.md): a curve, limits, boundary velocities and accelerations, "
                               "K cells per piece, the constraint mode and rho.")
       .def(py::init([](const PiecewiseCurve& curve, const VehicleLimits& limits, int K, const std::string& mode, double rho,
                        const py::object& start_velocity, const py::object& end_velocity,
@@ -490,7 +490,7 @@ PYBIND11_MODULE(timeopt, m) {
           [](TemporalProblem& p, const py::handle& v) { p.boundary.end_acceleration = Vec3(v, "end_acceleration"); })
       .def("validate", &TemporalProblem::Validate, "Raises ValueError naming the first bad field.");
 
-  m.def("load_problem", &ReadTemporalProblemJson, py::arg("path"), "Reads a problem JSON file (DESIGN.md), as `timeopt temporal` does.");
+  m.def("load_problem", &ReadTemporalProblemJson, py::arg("path"), "Reads a problem JSON file (docs/formats.md), as `timeopt temporal` does.");
   m.def(
       "parse_problem", [](const std::string& text) { return ParseTemporalProblemJson(text); }, py::arg("json_text"),
       "Parses problem JSON text.");

@@ -211,7 +211,7 @@ int RunWaypoints(const WaypointsArgs& args) {
 void RegisterTemporalCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<TemporalArgs>();
   CLI::App* sub = app.add_subcommand(
-      "temporal", "Minimum-time temporal profile along a given curve (problem JSON of DESIGN.md)");
+      "temporal", "Minimum-time temporal profile along a given curve (problem JSON: docs/formats.md)");
   sub->add_option("PROBLEM", args->problem, "Problem JSON file")->required();
   sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
       ->check(CLI::IsMember(EnumNames(kTemporalBackends)))

@@ -516,7 +516,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
     ok &= o.SetNumericValue("acceptable_dual_inf_tol", kAcceptableDualInfeasibility);
     ok &= o.SetIntegerValue("acceptable_iter", kAcceptableIterations);
     ok &= o.SetStringValue("linear_solver", "mumps");
-    // No MC64/MUMPS scaling: faster on this well-scaled banded KKT system (DESIGN.md).
+    // No MC64/MUMPS scaling: faster on this well-scaled banded KKT system.
     ok &= o.SetIntegerValue("mumps_permuting_scaling", 0);
     ok &= o.SetIntegerValue("mumps_scaling", 0);
     ok &= o.SetStringValue("hessian_approximation", "exact");

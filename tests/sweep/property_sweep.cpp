@@ -310,8 +310,8 @@ std::string CheckOptimal(const TemporalProblem& p, const TemporalResult& r) {
   return {};
 }
 
-// The problem as the problem JSON of DESIGN.md (`timeopt temporal FILE` solves it), to reproduce a
-// failure outside the sweep.
+// The problem as the problem JSON of docs/formats.md (`timeopt temporal FILE` solves it), to
+// reproduce a failure outside the sweep.
 std::string ProblemJson(const TemporalProblem& p) {
   std::string out = "{\"curve\": {\"pieces\": [";
   char number[40];

@@ -1,15 +1,15 @@
 #!/usr/bin/python3
 """Cross-check of `timeopt temporal` against an independent formulation and solver.
 
-The temporal problem is written here a second time, from the contract in DESIGN.md alone (velocity
-at grid points, acceleration at cell middles, joints with parallel tangents by eq. 42 and a stop at
-kinks, boundary speeds along the tangent, the acceleration-change rows, rho, curves given with
-`durations`; and, for every third problem, certified mode:
-every Bernstein coefficient of the velocity and acceleration polynomials of every cell within the
-limits), as a second-order cone program for CVXOPT's conelp (Debian's python3-cvxopt, an
-interior-point solver of its own). The random curves (cubic and quintic, C1 or only G1 in s) are
-generated here, so they are not in the repository. Each problem is solved by `timeopt temporal
---solver socp` and `--solver ipopt` and by CVXOPT.
+The temporal problem is written here a second time, from docs/temporal.md ("The discretized
+problem") and docs/formats.md (the problem JSON) alone (velocity at grid points, acceleration at
+cell middles, joints with parallel tangents by eq. 42 and a stop at kinks, boundary speeds along the
+tangent, the acceleration-change rows, rho, curves given with `durations`; and, for every third
+problem, certified mode: every Bernstein coefficient of the velocity and acceleration polynomials
+of every cell within the limits), as a second-order cone program for CVXOPT's conelp (Debian's
+python3-cvxopt, an interior-point solver of its own). The random curves (cubic and quintic, C1 or
+only G1 in s) are generated here, so they are not in the repository. Each problem is solved by
+`timeopt temporal --solver socp` and `--solver ipopt` and by CVXOPT.
 
 Paper mode: T and J must agree to 1e-6 relative (T to 1e-5 when rho > 0, see below). All three
 solvers stop at gaps near 1e-8, so the margin is about 100, while a difference in the rows shows at
@@ -114,7 +114,8 @@ def random_problem(rng, mode):
     problem["boundary"] = boundary
     if rng.random() < 0.3:
         # The same curve as a time-parameterized planner writes it: piece i in tau in [0, h_i], so
-        # the coefficient of tau^j is c_j / h_i^j (DESIGN.md: rescaled to s = tau / h_i on input).
+        # the coefficient of tau^j is c_j / h_i^j (docs/formats.md: rescaled to s = tau / h_i on
+        # input).
         durations = [rng.uniform(0.5, 3.0) for _ in range(pieces)]
         problem["curve"] = {
             "durations": durations,
@@ -144,9 +145,9 @@ def bernstein(poly):
 
 
 def certified_rows(coefs, cells, ds, vmax, amax, b_terms, less_equal):
-    """DESIGN.md's certified mode: on a cell, with u in [0, 1], s = s_k + u ds, b = (1 - u) b0 + u b1
-    and a = (b1 - b0) / (2 ds), every Bernstein coefficient of f'(s)^2 b and of f'(s) a + f''(s) b
-    (linear in b0, b1) is within the limits."""
+    """Certified mode (docs/temporal.md, "The discretized problem"): on a cell, with u in [0, 1],
+    s = s_k + u ds, b = (1 - u) b0 + u b1 and a = (b1 - b0) / (2 ds), every Bernstein coefficient of
+    f'(s)^2 b and of f'(s) a + f''(s) b (linear in b0, b1) is within the limits."""
     P = np.polynomial.Polynomial
     one_minus_u, u = P([1.0, -1.0]), P([0.0, 1.0])
     for g0, g1, i, k in cells:
@@ -177,7 +178,9 @@ def certified_rows(coefs, cells, ds, vmax, amax, b_terms, less_equal):
 
 
 def solve_with_cvxopt(problem, coefs, tolerance):
-    """The temporal SOCP, written from DESIGN.md, solved by CVXOPT. Returns (status, T, J, seconds)."""
+    """The temporal SOCP, written from docs/temporal.md, solved by CVXOPT.
+
+    Returns (status, T, J, seconds)."""
     K = problem["discretization"]["K"]
     ds = 1.0 / K
     m = len(coefs)
@@ -379,8 +382,8 @@ def main():
         directory = args.keep or tmp
         os.makedirs(directory, exist_ok=True)
         for index in range(args.problems):
-            # Every third problem in certified mode (DESIGN.md: every Bernstein coefficient on every
-            # cell within the limits).
+            # Every third problem in certified mode (docs/temporal.md: every Bernstein coefficient on
+            # every cell within the limits).
             mode = "certified" if index % 3 == 2 else "paper"
             problem, coefs = random_problem(rng, mode)
             path = os.path.join(directory, f"problem_{index}.json")

@@ -1,6 +1,6 @@
 #pragma once
 
-// Curve and waypoint files (the contracts of DESIGN.md).
+// Curve and waypoint files (described in docs/formats.md).
 //
 // Curve JSON: {"pieces": [{"x": [c0, c1, ...], "y": [...], "z": [...]}, ...],
 //              "durations": [h0, h1, ...]}   ("durations" optional)

@@ -1,6 +1,6 @@
 #pragma once
 
-// Temporal problem and result files (the contract of DESIGN.md), and trajectory sample CSVs.
+// Temporal problem and result files, and trajectory sample CSVs (all in docs/formats.md).
 //
 // Problem JSON:
 //   {"curve": {...curve contract, optional "durations"...},
