@@ -62,7 +62,7 @@ class Curve:
     def to_json(self) -> str: ...
 
 class TemporalProblem:
-    def __init__(self, curve: Curve, limits: Limits = ..., *, K: int = 50, constraint_mode: str = "paper",
+    def __init__(self, curve: Curve, limits: Limits = ..., *, K: int = 50, constraint_mode: str = "certified",
                  rho: float = 0.0, start_velocity: Optional[ArrayLike] = None, end_velocity: Optional[ArrayLike] = None,
                  start_acceleration: Optional[ArrayLike] = None, end_acceleration: Optional[ArrayLike] = None,
                  relax_boundary: bool = False) -> None: ...

@@ -360,11 +360,12 @@ PYBIND11_MODULE(timeopt, m) {
                             "optional per-axis max_jerk, and the quadrotor's max_speed, max_acceleration_norm, max_thrust, "
                             "min_thrust (m/s^2), max_tilt (rad), gravity.")
       .def(py::init([](const py::kwargs& kwargs) {
-             VehicleLimits l;
+             VehicleLimits l = FlightLimits();
              for (const auto& item : kwargs) SetLimit(&l, item.first.cast<std::string>(), item.second);
              return l;
            }),
-           "Limits(max_velocity=2, max_acceleration=1, max_jerk=None, max_speed=None, ...): scalars apply to all axes.")
+           "Limits(max_velocity=2, max_acceleration=2, max_jerk=10, max_speed=None, ...): scalars apply to all axes; "
+           "the defaults are the planner's, a flyable trajectory; max_jerk=None for none (the paper's profile).")
       .def_property(
           "max_velocity", [](const VehicleLimits& l) { return ToArray(l.max_velocity); },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_velocity", v); })
@@ -466,8 +467,8 @@ PYBIND11_MODULE(timeopt, m) {
              p.relax_boundary = relax_boundary;
              return p;
            }),
-           py::arg("curve"), py::arg("limits") = VehicleLimits(), py::kw_only(), py::arg("K") = 50,
-           py::arg("constraint_mode") = "paper", py::arg("rho") = 0.0, py::arg("start_velocity") = py::none(),
+           py::arg("curve"), py::arg("limits") = FlightLimits(), py::kw_only(), py::arg("K") = 50,
+           py::arg("constraint_mode") = ToString(kFlightConstraintMode), py::arg("rho") = 0.0, py::arg("start_velocity") = py::none(),
            py::arg("end_velocity") = py::none(), py::arg("start_acceleration") = py::none(),
            py::arg("end_acceleration") = py::none(), py::arg("relax_boundary") = false)
       .def_readwrite("curve", &TemporalProblem::curve)

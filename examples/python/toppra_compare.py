@@ -26,7 +26,7 @@ vmax, amax, K = np.array([2.0, 2.0, 1.0]), np.array([1.5, 1.5, 1.0]), 100
 
 curve = timeopt.Curve.from_waypoints(waypoints, kind="cubic")
 start = time.perf_counter()
-ours = timeopt.solve(timeopt.TemporalProblem(curve, timeopt.Limits(max_velocity=vmax, max_acceleration=amax), K=K,
+ours = timeopt.solve(timeopt.TemporalProblem(curve, timeopt.Limits(max_velocity=vmax, max_acceleration=amax, max_jerk=None), K=K,
                                              constraint_mode="certified"))
 ours_seconds = time.perf_counter() - start
 

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "timeopt/conic/solver.h"
 #include "timeopt/planner/planner.h"
@@ -29,8 +30,8 @@ constexpr int kExitInfeasible = 3;
 // its acceleration steps.
 inline constexpr const char* kFlightNote =
     "expected without a jerk limit: the planned trajectory holds its limits, but its acceleration "
-    "steps between cells and a jerk-input vehicle overshoots at each step (README, 'Verification "
-    "by simulation'); plan with --max-jerk";
+    "steps between cells and a jerk-input vehicle overshoots at each step ('Verification "
+    "by simulation' in docs/simulation.md); time it with a jerk limit (--max-jerk)";
 
 // The flight verdict's slack for jerk-limited plans: the simulated controller holds its jerk
 // command over each 1 ms step, so it lags a continuous reference by a little (measured 0.2-0.5%
@@ -58,6 +59,27 @@ inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {
   QuadrotorSimOptions options;
   if (limits.max_jerk) options.limit_tolerance = kJerkLimitedFlightTolerance;
   return QuadrotorSim(options);
+}
+
+// The flight block of the summaries (`plan`'s JSON, `waypoints`' result.json): the verdict of
+// SummaryQuadrotor(limits), its ratios, the tolerance it allowed, and kFlightNote when a profile
+// without a jerk limit was not flown within its limits.
+inline nlohmann::ordered_json FlightSummary(const FeasibilityReport& flight, const VehicleLimits& limits) {
+  nlohmann::ordered_json j = {{"feasible", flight.feasible},
+                              {"max_velocity_ratio", flight.max_velocity_ratio},
+                              {"max_acceleration_ratio", flight.max_acceleration_ratio},
+                              {"max_position_error", flight.max_position_error}};
+  const auto ratio = [&](const char* key, const std::optional<double>& value) {
+    if (value) j[key] = *value;
+  };
+  ratio("max_speed_ratio", flight.max_speed_ratio);
+  ratio("max_acceleration_norm_ratio", flight.max_acceleration_norm_ratio);
+  ratio("max_thrust_ratio", flight.max_thrust_ratio);
+  ratio("min_thrust_ratio", flight.min_thrust_ratio);
+  ratio("max_tilt_ratio", flight.max_tilt_ratio);
+  j["tolerance"] = SummaryQuadrotor(limits).options().limit_tolerance;
+  if (!flight.feasible && !limits.max_jerk) j["note"] = kFlightNote;
+  return j;
 }
 
 // The one mapping from the library's statuses to exit codes (exit_codes.cpp): 0 success, 2 invalid

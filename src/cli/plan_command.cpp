@@ -149,20 +149,7 @@ int RunPlan(PlanArgs args) {
     try {
       const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(
           trajectory, options.limits, options.start_velocity, options.start_acceleration);
-      summary["flight"] = {{"feasible", flight.feasible},
-                           {"max_velocity_ratio", flight.max_velocity_ratio},
-                           {"max_acceleration_ratio", flight.max_acceleration_ratio},
-                           {"max_position_error", flight.max_position_error}};
-      const auto flight_ratio = [&](const char* key, const std::optional<double>& value) {
-        if (value) summary["flight"][key] = *value;
-      };
-      flight_ratio("max_speed_ratio", flight.max_speed_ratio);
-      flight_ratio("max_acceleration_norm_ratio", flight.max_acceleration_norm_ratio);
-      flight_ratio("max_thrust_ratio", flight.max_thrust_ratio);
-      flight_ratio("min_thrust_ratio", flight.min_thrust_ratio);
-      flight_ratio("max_tilt_ratio", flight.max_tilt_ratio);
-      if (options.limits.max_jerk) summary["flight"]["tolerance"] = kJerkLimitedFlightTolerance;
-      if (!flight.feasible && !options.limits.max_jerk) summary["flight"]["note"] = kFlightNote;
+      summary["flight"] = FlightSummary(flight, options.limits);
     } catch (const std::invalid_argument& e) {
       summary["flight"] = {{"error", e.what()}};
     }

@@ -122,21 +122,28 @@ std::string QuadrotorRatios(const Ratios& r) {
   return ss.str();
 }
 
-// Defaults are the library's (a default TemporalProblem), never restated here.
+// Defaults are the library's flight defaults (FlightLimits, kFlightConstraintMode: a trajectory
+// that holds its limits between grid points and can be flown), never restated here.
 struct WaypointsArgs {
   std::string waypoints;
   std::string kind = "minjerk";
-  // Unset: the library's default, or none when a quadrotor limit bounds the same quantity.
+  // Unset: the flight default, or none when a quadrotor limit bounds the same quantity.
   std::optional<double> max_velocity, max_acceleration;
-  double max_jerk = 0.0;  // 0: none (the paper's profile)
+  double max_jerk = FlightLimits().max_jerk->x();  // 0: none (the paper's profile)
   QuadrotorLimitArgs quadrotor;
   int K = TemporalProblem().cells_per_piece;
   double rho = TemporalProblem().rho;
   std::string solver = ToString(TemporalBackend::kSocp);
-  std::string constraint_mode = ToString(TemporalProblem().constraint_mode);
+  std::string constraint_mode = ToString(kFlightConstraintMode);
   std::string out_dir = "results";
   double rate = kDefaultSampleRateHz;
 };
+
+std::string FormatNumber(double value) {
+  std::ostringstream ss;
+  ss << std::setprecision(6) << value;
+  return ss.str();
+}
 
 int RunWaypoints(const WaypointsArgs& args) {
   const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
@@ -144,12 +151,13 @@ int RunWaypoints(const WaypointsArgs& args) {
   problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   constexpr double kNone = std::numeric_limits<double>::infinity();
   const QuadrotorLimitArgs& q = args.quadrotor;
-  const double default_v = TemporalProblem().limits.max_velocity.x();
-  const double default_a = TemporalProblem().limits.max_acceleration.x();
+  const double default_v = FlightLimits().max_velocity.x();
+  const double default_a = FlightLimits().max_acceleration.x();
   problem.limits.max_velocity.setConstant(args.max_velocity.value_or(q.max_speed ? kNone : default_v));
   problem.limits.max_acceleration.setConstant(args.max_acceleration.value_or(
       q.max_acceleration_norm || q.max_thrust || q.max_tilt ? kNone : default_a));
   ApplyQuadrotorLimits(q, &problem.limits);
+  problem.limits.max_jerk.reset();
   if (args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
   problem.cells_per_piece = args.K;
   problem.rho = args.rho;
@@ -164,11 +172,13 @@ int RunWaypoints(const WaypointsArgs& args) {
 
   const auto solver = MakeTemporalSolver(ParseBackend(args.solver));
   const TemporalResult result = solver->Solve(problem);
-  WriteTextFile((dir / "result.json").string(), TemporalResultToJson(result));
   if (!result.is_success()) {
+    WriteTextFile((dir / "result.json").string(), TemporalResultToJson(result));
     std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
     return ExitCodeFor(result.status);
   }
+  // result.json: the result and the flight block (as in `plan`'s summary).
+  nlohmann::json result_json = nlohmann::json::parse(TemporalResultToJson(result));
   const Trajectory trajectory(problem.curve, result.profile);
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
   WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
@@ -177,6 +187,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   try {
     const FeasibilityReport flight = sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity,
                                                    problem.boundary.start_acceleration);
+    result_json["flight"] = FlightSummary(flight, problem.limits);
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
           << ", max |a|/amax " << flight.max_acceleration_ratio << QuadrotorRatios(flight) << " ("
@@ -185,13 +196,15 @@ int RunWaypoints(const WaypointsArgs& args) {
     if (!flight.feasible && !problem.limits.max_jerk) flown << "\n  note: " << kFlightNote;
   } catch (const std::invalid_argument& e) {
     flown << "not flown in simulation: " << e.what();
+    result_json["flight"] = {{"error", e.what()}};
   }
+  WriteTextFile((dir / "result.json").string(), result_json.dump(2) + "\n");
 
   std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
             << problem.curve.ArcLength(1e-9) << " m)\n"
             << "limits: " << LimitsLine(problem.limits)
-            << (args.max_jerk > 0.0 ? "max_jerk " + std::to_string(args.max_jerk) + " m/s^3, " : std::string())
+            << (args.max_jerk > 0.0 ? "max_jerk " + FormatNumber(args.max_jerk) + " m/s^3, " : std::string())
             << "K " << args.K << ", rho " << args.rho << ", "
             << args.constraint_mode << " constraints\n"
             << "solver: " << result.solver << ", " << result.iterations << " iterations, "
@@ -241,12 +254,12 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember({"cubic", "minjerk"}))
       ->capture_default_str();
   sub->add_option("--max-velocity", args->max_velocity,
-                  "Per-axis velocity limit, m/s (default " + std::to_string(TemporalProblem().limits.max_velocity.x()) +
+                  "Per-axis velocity limit, m/s (default " + std::to_string(FlightLimits().max_velocity.x()) +
                       "; none when --max-speed is given)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--max-acceleration", args->max_acceleration,
                   "Per-axis acceleration limit, m/s^2 (default " +
-                      std::to_string(TemporalProblem().limits.max_acceleration.x()) +
+                      std::to_string(FlightLimits().max_acceleration.x()) +
                       "; none when --max-acceleration-norm, --max-thrust or --max-tilt is given)")
       ->check(CLI::PositiveNumber);
   AddQuadrotorLimitOptions(sub, &args->quadrotor);

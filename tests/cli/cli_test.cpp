@@ -14,6 +14,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "../common/run_cli.h"
 
@@ -137,12 +138,19 @@ TEST_F(CliTest, TemporalExitCodes) {
   EXPECT_THAT(r.output, HasSubstr("nothing.json"));
 }
 
-// Reads the number after "key": in a JSON text (enough for the flat results of the CLI).
-double JsonNumber(const std::string& json, const std::string& key) {
-  const auto at = json.find("\"" + key + "\":");
-  if (at == std::string::npos) return std::nan("");
-  return std::stod(json.substr(at + key.size() + 3));
+// The top-level number `key` of a JSON text (NaN when absent or not a number); nested blocks such
+// as "flight" are read with JsonNumberIn.
+double JsonNumberIn(const std::string& json, const std::string& block, const std::string& key) {
+  const nlohmann::json j = nlohmann::json::parse(json, nullptr, false);
+  const nlohmann::json* at = &j;
+  if (!block.empty()) {
+    if (!j.is_object() || !j.contains(block)) return std::nan("");
+    at = &j[block];
+  }
+  if (!at->is_object() || !at->contains(key) || !(*at)[key].is_number()) return std::nan("");
+  return (*at)[key].get<double>();
 }
+double JsonNumber(const std::string& json, const std::string& key) { return JsonNumberIn(json, "", key); }
 
 // examples/line_problem.json is a 10 m line, vmax 2, amax 1, rest to rest: T = L/v + v/a = 7 s in
 // closed form, and with rho = 0 the SOCP's optimal value is T. The exported file, read back and
@@ -272,6 +280,27 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   EXPECT_THAT(r.output, HasSubstr("--control-rate must be at least 10 x --bandwidth"));
 }
 
+// `waypoints` with no flags times the curve as the planner would (certified rows, 2 m/s, 2 m/s^2,
+// 10 m/s^3): the dense check of the result holds every limit to the solver's 1e-6, and the
+// simulated jerk-input vehicle (an independent model: it integrates its own jerk commands) flies
+// it within the product's 1% flight criterion, as result.json's flight block says.
+TEST_F(CliTest, WaypointsDefaultsToAFlyableProfile) {
+  const std::string waypoints = std::string(TIMEOPT_SOURCE_DIR) + "/examples/waypoints.csv";
+  const CliRun r = RunCli("waypoints " + waypoints + " --out-dir " + Path("wd"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("certified constraints"));
+  EXPECT_THAT(r.output, HasSubstr("max_jerk 10"));
+  const std::string json = ReadTextFile(Path("wd/result.json"));
+  EXPECT_LE(JsonNumber(json, "max_velocity_ratio"), 1.0 + 1e-6);
+  EXPECT_LE(JsonNumber(json, "max_acceleration_ratio"), 1.0 + 1e-6);
+  EXPECT_LE(JsonNumber(json, "max_jerk_ratio"), 1.0 + 1e-6);
+  const nlohmann::json flight = nlohmann::json::parse(json)["flight"];
+  EXPECT_TRUE(flight["feasible"].get<bool>()) << json;
+  EXPECT_EQ(flight["tolerance"].get<double>(), 0.01);
+  EXPECT_LE(JsonNumberIn(json, "flight", "max_velocity_ratio"), 1.01);
+  EXPECT_LE(JsonNumberIn(json, "flight", "max_acceleration_ratio"), 1.01);
+}
+
 // The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
 // --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
 // JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or
@@ -313,8 +342,8 @@ TEST_F(CliTest, InfeasibleStartIsNamedAndRelaxed) {
   r = RunCli("temporal " + Path("fast.json") + " --relax-boundary -o " + Path("r.json"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   json = ReadTextFile(Path("r.json"));
-  EXPECT_NEAR(JsonNumber(json, "start_speed"), 2.0, 1e-9);
-  EXPECT_NEAR(JsonNumber(json, "start_violation"), 1.0, 1e-9);
+  EXPECT_NEAR(JsonNumberIn(json, "boundary_relaxation", "start_speed"), 2.0, 1e-9);
+  EXPECT_NEAR(JsonNumberIn(json, "boundary_relaxation", "start_violation"), 1.0, 1e-9);
   EXPECT_NEAR(JsonNumber(json, "total_time"), 6.0, 1e-6);
 }
 

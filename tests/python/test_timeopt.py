@@ -62,6 +62,24 @@ def test_same_t_as_the_command_line_bit_for_bit(solver, tmp_path):
     assert same(timeopt.solve(problem, solver=solver).total_time, expected["total_time"])
 
 
+def test_defaults_are_the_planners_flyable_ones():
+    # Limits() and TemporalProblem(curve) default to what `timeopt plan` and `timeopt waypoints` use
+    # (2 m/s, 2 m/s^2, 10 m/s^3, certified rows), so a default solve is the CLI's default answer to
+    # the bit, and it holds every limit on the dense check (certified rows: to the solver's 1e-6).
+    limits = timeopt.Limits()
+    np.testing.assert_array_equal(limits.max_velocity, [2, 2, 2])
+    np.testing.assert_array_equal(limits.max_acceleration, [2, 2, 2])
+    np.testing.assert_array_equal(limits.max_jerk, [10, 10, 10])
+    assert timeopt.Limits(max_jerk=None).max_jerk is None
+    waypoints = np.loadtxt(os.path.join(SOURCE, "examples", "waypoints.csv"), delimiter=",", skiprows=1)
+    problem = timeopt.TemporalProblem(timeopt.Curve.from_waypoints(waypoints))
+    assert problem.constraint_mode == timeopt.ConstraintMode.certified
+    result = timeopt.solve(problem)
+    assert result.status == timeopt.TemporalStatus.optimal
+    for ratio in (result.max_velocity_ratio, result.max_acceleration_ratio, result.max_jerk_ratio):
+        assert ratio <= 1 + 1e-6
+
+
 def test_curve_evaluation_matches_the_coefficients_and_finite_differences():
     waypoints = np.array([[0, 0, 1], [3, 1, 1.5], [5, -2, 1], [8, 0, 2]], dtype=float)
     curve = timeopt.Curve.from_waypoints(waypoints, kind="minjerk")

@@ -29,17 +29,8 @@
 
 namespace timeopt {
 
-// 2 m/s, 2 m/s^2 and 10 m/s^3 per axis. The jerk limit makes the plan flyable by a jerk-input
-// vehicle (continuous acceleration). Its value: a multirotor changes its acceleration by tilting
-// its thrust, so |jerk| is about its body rate times |a + g|; a calm 1 rad/s at |a + g| ~ 10 m/s^2
-// gives 10 m/s^3 (5 x the acceleration limit; copp's benchmarks use 10 x).
-inline VehicleLimits DefaultPlannerLimits() {
-  VehicleLimits limits;
-  limits.max_velocity.setConstant(2.0);
-  limits.max_acceleration.setConstant(2.0);
-  limits.max_jerk = Eigen::Vector3d::Constant(10.0);
-  return limits;
-}
+// The planner's limits: FlightLimits() (timeopt/temporal/temporal_problem.h).
+inline VehicleLimits DefaultPlannerLimits() { return FlightLimits(); }
 
 struct PlannerOptions {
   // The vehicle's state at the start, m/s and m/s^2: zero for a start at rest (hover). A start in

@@ -50,6 +50,22 @@ const char* ToString(ConstraintMode mode);
 // The enumerator named `text` (as ToString writes it) into *mode; false when none is.
 bool FromString(const std::string& text, ConstraintMode* mode);
 
+// The defaults of every entry point that times a curve to be flown (the planner, `timeopt
+// waypoints`, Python's Limits and TemporalProblem): 2 m/s, 2 m/s^2 and 10 m/s^3 per axis, with
+// certified rows, so that the limits hold between grid points and the acceleration is continuous
+// (a jerk-input vehicle flies it). The jerk value: a multirotor changes its acceleration by
+// tilting its thrust, so |jerk| is about its body rate times |a + g|; a calm 1 rad/s at
+// |a + g| ~ 10 m/s^2 gives 10 m/s^3. A default-constructed TemporalProblem and a problem JSON keep
+// the paper's defaults (docs/formats.md).
+inline VehicleLimits FlightLimits() {
+  VehicleLimits limits;
+  limits.max_velocity.setConstant(2.0);
+  limits.max_acceleration.setConstant(2.0);
+  limits.max_jerk = Eigen::Vector3d::Constant(10.0);
+  return limits;
+}
+inline constexpr ConstraintMode kFlightConstraintMode = ConstraintMode::kCertified;
+
 // The largest number of cells per piece a problem may ask for: 100000 (ds = 1e-5) is far finer
 // than any use needs, and keeps a problem's memory bounded per piece (a few MB).
 inline constexpr int kMaxCellsPerPiece = 100000;
