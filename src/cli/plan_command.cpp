@@ -43,6 +43,7 @@ constexpr const char* kDefaultPlot = "results/plan.png";
 struct PlanArgs {
   std::string map, start, goal, config, output, plot;
   std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
+  bool print_config = false;
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
   double region_margin = kDefaultRegionMargin;  // metres around start and goal; see --region-margin
@@ -67,20 +68,28 @@ Eigen::Vector3d ParsePoint(const std::string& text, const std::string& name) {
 
 using Json = nlohmann::ordered_json;
 
-int RunPlan(PlanArgs args) {
-  const bool defaults = args.map.empty();
-  if (defaults) {
-    args.map = kDefaultMap;
-    if (args.start.empty()) args.start = kDefaultStart;
-    if (args.goal.empty()) args.goal = kDefaultGoal;
-    if (args.output.empty()) args.output = kDefaultOutput;
-    if (args.plot.empty()) args.plot = kDefaultPlot;
+// The shipped default map, looked for in order: under the working directory (the source tree as
+// it), in the installation next to this executable (<prefix>/bin/timeopt reads
+// <prefix>/share/timeopt/maps/), and in the source tree this binary was built from (running it
+// from the build folder). A FileError names every place tried.
+std::string FindDefaultMap() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> tried = {fs::path(kDefaultMap)};
+  std::error_code error;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
+  if (!error) tried.push_back(exe.parent_path().parent_path() / TIMEOPT_INSTALL_DATA_DIR / kDefaultMap);
+  tried.push_back(fs::path(TIMEOPT_SOURCE_DATA_DIR) / kDefaultMap);
+  std::string where;
+  for (const fs::path& path : tried) {
+    if (fs::is_regular_file(path, error)) return path.lexically_normal().string();
+    where += (where.empty() ? "" : ", ") + path.lexically_normal().string();
   }
-  if (args.start.empty() || args.goal.empty()) {
-    throw std::invalid_argument("--start and --goal are required with --map");
-  }
-  const Eigen::Vector3d start = ParsePoint(args.start, "--start");
-  const Eigen::Vector3d goal = ParsePoint(args.goal, "--goal");
+  throw FileError("the shipped default map was not found (looked in " + where +
+                  "); give one with --map, --start and --goal");
+}
+
+// The planner's options: the library's defaults, then --config, then the flags; validated.
+PlannerOptions OptionsFrom(const PlanArgs& args) {
   PlannerOptions options;
   if (!args.config.empty()) options = ReadPlannerConfigJson(args.config, options);
   if (args.max_velocity) options.limits.max_velocity.setConstant(*args.max_velocity);
@@ -97,6 +106,29 @@ int RunPlan(PlanArgs args) {
   if (args.robot_radius) options.robot_radius = *args.robot_radius;
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("options: " + error);
+  return options;
+}
+
+int RunPlan(PlanArgs args) {
+  if (args.print_config) {
+    // The complete configuration these flags give, as --config reads it; nothing is planned.
+    std::cout << PlannerConfigToJson(OptionsFrom(args));
+    return kExitOk;
+  }
+  const bool defaults = args.map.empty();
+  if (defaults) {
+    args.map = FindDefaultMap();
+    if (args.start.empty()) args.start = kDefaultStart;
+    if (args.goal.empty()) args.goal = kDefaultGoal;
+    if (args.output.empty()) args.output = kDefaultOutput;
+    if (args.plot.empty()) args.plot = kDefaultPlot;
+  }
+  if (args.start.empty() || args.goal.empty()) {
+    throw std::invalid_argument("--start and --goal are required with --map");
+  }
+  const Eigen::Vector3d start = ParsePoint(args.start, "--start");
+  const Eigen::Vector3d goal = ParsePoint(args.goal, "--goal");
+  const PlannerOptions options = OptionsFrom(args);
 
   using Clock = std::chrono::steady_clock;
   UnknownSpace unknown = UnknownSpace::kFree;
@@ -220,6 +252,9 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_flag("--whole-map", args->whole_map, "The distance field covers the whole map (no region of interest)");
   AddMemoryBudgetOption(sub, &args->max_memory_mib);
+  sub->add_flag("--print-config", args->print_config,
+               "Print the complete planner configuration (the defaults, --config and the flags) as JSON "
+               "for --config, and plan nothing");
   sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");

@@ -301,6 +301,24 @@ TEST_F(CliTest, WaypointsDefaultsToAFlyableProfile) {
   EXPECT_LE(JsonNumberIn(json, "flight", "max_acceleration_ratio"), 1.01);
 }
 
+// `plan --print-config` prints the library's defaults as a planner configuration; the shipped
+// examples/planner_config.json is that text (so it cannot drift from the library), reading it back
+// gives it again (a round trip through ParsePlannerConfigJson), and flags land in it.
+TEST_F(CliTest, PlanPrintsItsCompleteConfiguration) {
+  const std::string shipped = std::string(TIMEOPT_SOURCE_DIR) + "/examples/planner_config.json";
+  CliRun r = RunCli("plan --print-config");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, ReadTextFile(shipped));
+  r = RunCli("plan --config " + shipped + " --print-config");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, ReadTextFile(shipped));
+  r = RunCli("plan --config " + shipped + " --max-jerk 0 --robot-radius 0.5 --print-config");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json config = nlohmann::json::parse(r.output);
+  EXPECT_FALSE(config["limits"].contains("max_jerk") && !config["limits"]["max_jerk"].is_null()) << r.output;
+  EXPECT_EQ(config["robot_radius"].get<double>(), 0.5);
+}
+
 // The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
 // --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
 // JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or
