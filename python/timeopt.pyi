@@ -172,6 +172,7 @@ def plan(map: Union[Esdf, OccupancyMap, str], start: ArrayLike, goal: ArrayLike,
 
 class FlightReport:
     feasible: bool
+    tolerance: float
     message: str
     max_velocity_ratio: float
     max_acceleration_ratio: float
@@ -182,7 +183,7 @@ class FlightReport:
     def to_json(self) -> str: ...
 
 def simulate(trajectory: Trajectory, limits: Limits, *, bandwidth: float = 10.0, time_step: float = 1e-3,
-             vehicle_max_jerk: Optional[ArrayLike] = None) -> FlightReport: ...
+             vehicle_max_jerk: Optional[ArrayLike] = None, tolerance: Optional[float] = None) -> FlightReport: ...
 
 class conic:
     """The conic solver (a submodule at run time)."""

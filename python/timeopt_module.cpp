@@ -730,6 +730,7 @@ PYBIND11_MODULE(timeopt, m) {
   // ---- simulation ----
   py::class_<FeasibilityReport>(m, "FlightReport", "A simulated flight: whether every limit held, and the largest ratios.")
       .def_readonly("feasible", &FeasibilityReport::feasible)
+      .def_readonly("tolerance", &FeasibilityReport::tolerance, "The verdict's relative slack: 0.01 with a jerk limit, 1e-9 without, unless given.")
       .def_readonly("message", &FeasibilityReport::message)
       .def_readonly("max_velocity_ratio", &FeasibilityReport::max_velocity_ratio)
       .def_readonly("max_acceleration_ratio", &FeasibilityReport::max_acceleration_ratio)
@@ -742,10 +743,11 @@ PYBIND11_MODULE(timeopt, m) {
   m.def(
       "simulate",
       [](const Trajectory& trajectory, const VehicleLimits& limits, double bandwidth, double time_step,
-         const py::object& vehicle_max_jerk) {
+         const py::object& vehicle_max_jerk, const py::object& tolerance) {
         QuadrotorSimOptions o;
         o.bandwidth = bandwidth;
         o.time_step = time_step;
+        o.limit_tolerance = tolerance.is_none() ? DefaultFlightTolerance(limits) : tolerance.cast<double>();
         if (!vehicle_max_jerk.is_none()) o.max_jerk = Vec3(vehicle_max_jerk, "vehicle_max_jerk", true);
         std::string error;
         if (!o.IsValid(&error)) throw py::value_error("simulate: " + error);
@@ -754,8 +756,10 @@ PYBIND11_MODULE(timeopt, m) {
         return sim.Run(trajectory, limits);
       },
       py::arg("trajectory"), py::arg("limits"), py::kw_only(), py::arg("bandwidth") = 10.0, py::arg("time_step") = 1e-3,
-      py::arg("vehicle_max_jerk") = py::none(),
-      "Flies the trajectory with the simulated jerk-input quadrotor and checks the limits in continuous time.");
+      py::arg("vehicle_max_jerk") = py::none(), py::arg("tolerance") = py::none(),
+      "Flies the trajectory with the simulated jerk-input quadrotor and checks the limits in continuous time. "
+      "tolerance: the verdict's relative slack; None: 0.01 when limits has a jerk limit (the product's flight "
+      "criterion, as timeopt plan, waypoints and simulate), 1e-9 otherwise.");
 
   // ---- the conic solver ----
   py::module_ conic_module = m.def_submodule("conic", "Our interior-point solver for LP / SOCP / rotated cones.");

@@ -33,10 +33,8 @@ inline constexpr const char* kFlightNote =
     "steps between cells and a jerk-input vehicle overshoots at each step ('Verification "
     "by simulation' in docs/simulation.md); time it with a jerk limit (--max-jerk)";
 
-// The flight verdict's slack for jerk-limited plans: the simulated controller holds its jerk
-// command over each 1 ms step, so it lags a continuous reference by a little (measured 0.2-0.5%
-// above the acceleration limit on the shipped plans); 1% is the product's flight criterion.
-inline constexpr double kJerkLimitedFlightTolerance = 0.01;
+// The flight verdict's slack for jerk-limited plans (timeopt/sim/quadrotor_sim.h).
+inline constexpr double kJerkLimitedFlightTolerance = kFlightTolerance;
 
 // The distance field's memory budget for --max-memory (MiB): half of this machine's physical
 // memory, so that a map too large for the machine is refused with a message (exit 2) before the
@@ -57,7 +55,7 @@ inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
 // The default quadrotor for the summaries' flights, with the verdict's slack for `limits`.
 inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {
   QuadrotorSimOptions options;
-  if (limits.max_jerk) options.limit_tolerance = kJerkLimitedFlightTolerance;
+  options.limit_tolerance = DefaultFlightTolerance(limits);
   return QuadrotorSim(options);
 }
 
@@ -77,7 +75,7 @@ inline nlohmann::ordered_json FlightSummary(const FeasibilityReport& flight, con
   ratio("max_thrust_ratio", flight.max_thrust_ratio);
   ratio("min_thrust_ratio", flight.min_thrust_ratio);
   ratio("max_tilt_ratio", flight.max_tilt_ratio);
-  j["tolerance"] = SummaryQuadrotor(limits).options().limit_tolerance;
+  j["tolerance"] = flight.tolerance;
   if (!flight.feasible && !limits.max_jerk) j["note"] = kFlightNote;
   return j;
 }

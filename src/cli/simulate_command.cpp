@@ -97,6 +97,11 @@ int RunSimulate(const SimulateArgs& args) {
       limits.max_acceleration.setConstant(args.max_acceleration > 0.0 ? args.max_acceleration : kNone);
       ApplyQuadrotorLimits(args.quadrotor, &limits);
       const double duration = samples.back().t - samples.front().t;
+      if (!args.tolerance) {
+        // Samples are flown as a C2 interpolation of themselves: the product's flight criterion.
+        options.limit_tolerance = kFlightTolerance;
+        sim = QuadrotorSim(options);
+      }
       report = sim.Run(SampledReference(samples), duration, limits);
       json["samples"] = static_cast<int>(samples.size());
       json["total_time"] = duration;
@@ -117,8 +122,8 @@ int RunSimulate(const SimulateArgs& args) {
         std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
         return ExitCodeFor(result.status);
       }
-      if (!args.tolerance && problem.limits.max_jerk) {
-        options.limit_tolerance = kJerkLimitedFlightTolerance;
+      if (!args.tolerance) {
+        options.limit_tolerance = DefaultFlightTolerance(problem.limits);
         sim = QuadrotorSim(options);
       }
       // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
@@ -137,7 +142,7 @@ int RunSimulate(const SimulateArgs& args) {
 
   const nlohmann::ordered_json flown = nlohmann::ordered_json::parse(FeasibilityReportToJson(report));
   for (const auto& item : flown.items()) json[item.key()] = item.value();
-  json["tolerance"] = sim.options().limit_tolerance;
+  json["tolerance"] = report.tolerance;
   json["bandwidth"] = args.bandwidth;
   json["control_rate"] = args.control_rate;
   const std::string text = json.dump(2) + "\n";
@@ -187,8 +192,8 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   AddQuadrotorLimitOptions(sub, &args->quadrotor);
   sub->add_option("--tolerance", args->tolerance,
-                  "Relative slack of the verdict (default: rounding only, or 0.01 for a problem with "
-                  "limits.max_jerk)")
+                  "Relative slack of the verdict (default: 0.01 for a problem with limits.max_jerk and for "
+                  "--samples, rounding only (1e-9) otherwise)")
       ->check(CLI::Range(0.0, 1.0));
   sub->add_option("-o,--output", args->output, "Report JSON file (default: stdout)");
   sub->add_option("--states", args->states,

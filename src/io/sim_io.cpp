@@ -10,6 +10,7 @@ namespace timeopt {
 std::string FeasibilityReportToJson(const FeasibilityReport& report, int indent) {
   nlohmann::ordered_json j;
   j["feasible"] = report.feasible;
+  j["tolerance"] = report.tolerance;
   j["message"] = report.message;
   j["max_velocity_ratio"] = report.max_velocity_ratio;
   j["max_velocity_time"] = report.max_velocity_time;

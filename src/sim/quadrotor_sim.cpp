@@ -242,6 +242,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
     a += dt * u;
   }
 
+  report.tolerance = options_.limit_tolerance;
   const double bound = 1.0 + options_.limit_tolerance;
   const bool velocity_ok = report.max_velocity_ratio <= bound;
   const bool acceleration_ok = report.max_acceleration_ratio <= bound;
@@ -323,7 +324,7 @@ QuadrotorSim::Reference SampledReference(std::vector<TrajectoryState> samples) {
   }
   for (TrajectoryState& s : samples) s.t -= t0;
   return [samples = std::move(samples)](double t) {
-    // The last sample at or before t (the first for t < 0).
+    // The interval [s_k, s_k+1] that holds t (the first for t < 0; the last sample after the end).
     const auto after = std::upper_bound(samples.begin(), samples.end(), t,
                                         [](double value, const TrajectoryState& s) { return value < s.t; });
     if (after == samples.end()) {
@@ -331,14 +332,45 @@ QuadrotorSim::Reference SampledReference(std::vector<TrajectoryState> samples) {
       r.t = t;
       return r;
     }
-    const TrajectoryState& s = after == samples.begin() ? samples.front() : *(after - 1);
-    const double tau = std::max(0.0, t - s.t);
+    if (after == samples.begin()) {
+      TrajectoryState r = samples.front();
+      r.t = t;
+      return r;
+    }
+    // Per axis, from sample k: its jerk j0 until a switch to sample k+1's jerk j1 at the time
+    // that lands on sample k+1's acceleration, a0 + j0 tau* + j1 (h - tau*) = a1, when that time
+    // lies in the interval. So a trajectory whose jerk is piecewise constant with at most one
+    // switch per interval on each axis (a jerk-limited profile sampled finely enough) is flown
+    // exactly as it is. Otherwise (an acceleration step, as the paper's profile has) sample k's
+    // jerk is held and the acceleration steps at sample k+1, as the trajectory does.
+    const TrajectoryState& s0 = *(after - 1);
+    const TrajectoryState& s1 = *after;
+    const double h = s1.t - s0.t, tau = t - s0.t;
     TrajectoryState r;
     r.t = t;
-    r.jerk = s.jerk;
-    r.acceleration = s.acceleration + tau * s.jerk;
-    r.velocity = s.velocity + tau * (s.acceleration + 0.5 * tau * s.jerk);
-    r.position = s.position + tau * (s.velocity + tau * (0.5 * s.acceleration + tau * s.jerk / 6.0));
+    for (int i = 0; i < 3; ++i) {
+      const double a0 = s0.acceleration(i), j0 = s0.jerk(i), j1 = s1.jerk(i);
+      double p = s0.position(i), v = s0.velocity(i), acc = a0;
+      double held = tau, after_switch = 0.0;
+      if (j0 != j1) {
+        const double at = (s1.acceleration(i) - a0 - j1 * h) / (j0 - j1);
+        if (at >= 0.0 && at <= h && tau > at) {
+          held = at;
+          after_switch = tau - at;
+        }
+      }
+      // Exact integration over the held part, then over the part after the switch.
+      p += held * (v + held * (0.5 * acc + held * j0 / 6.0));
+      v += held * (acc + 0.5 * held * j0);
+      acc += held * j0;
+      p += after_switch * (v + after_switch * (0.5 * acc + after_switch * j1 / 6.0));
+      v += after_switch * (acc + 0.5 * after_switch * j1);
+      acc += after_switch * j1;
+      r.position(i) = p;
+      r.velocity(i) = v;
+      r.acceleration(i) = acc;
+      r.jerk(i) = after_switch > 0.0 ? j1 : j0;
+    }
     return r;
   };
 }

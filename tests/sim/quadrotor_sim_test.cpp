@@ -259,6 +259,50 @@ TEST(QuadrotorSim, SampledReferenceOfACubicIsTheCubic) {
   EXPECT_THROW(SampledReference(samples), std::invalid_argument);
 }
 
+// A jerk-limited profile switches its jerk inside sample intervals: on each axis the sampled
+// reference switches from one sample's jerk to the next's at the time that lands on the next
+// sample's acceleration, so a jerk with at most one switch per interval is reproduced exactly (the
+// truth is the closed-form integral of the piecewise-constant jerk), and so is its flight.
+TEST(QuadrotorSim, SampledReferenceOfAJerkLimitedProfileIsTheProfile) {
+  // x: +4 until 0.12345 s, -4 until 0.37125 s, 0 after; y: -2 until 0.25055 s, +3 after; z: 0 (switches
+  // off the 0.1 ms control grid, so that both flights hold a jerk across each switch alike).
+  const auto exact = [](double t) {
+    TrajectoryState r{t};
+    const auto axis = [t](std::initializer_list<std::pair<double, double>> pieces, int i, TrajectoryState* s) {
+      double p = 0.0, v = 0.0, a = 0.0, from = 0.0, j = 0.0;
+      for (const auto& [until, jerk] : pieces) {
+        const double d = std::max(0.0, std::min(t, until) - from);
+        p += d * (v + d * (0.5 * a + d * jerk / 6.0));
+        v += d * (a + 0.5 * d * jerk);
+        a += d * jerk;
+        if (t >= from) j = jerk;
+        from = until;
+      }
+      s->position(i) = p;
+      s->velocity(i) = v;
+      s->acceleration(i) = a;
+      s->jerk(i) = j;
+    };
+    axis({{0.12345, 4.0}, {0.37125, -4.0}, {10.0, 0.0}}, 0, &r);
+    axis({{0.25055, -2.0}, {10.0, 3.0}}, 1, &r);
+    return r;
+  };
+  std::vector<TrajectoryState> samples;
+  for (int k = 0; k <= 10; ++k) samples.push_back(exact(0.1 * k));
+  const QuadrotorSim::Reference sampled = SampledReference(samples);
+  for (int k = 0; k <= 1000; ++k) {
+    const double t = 1e-3 * k;
+    ASSERT_LT((sampled(t).position - exact(t).position).norm(), 1e-14) << t;
+    ASSERT_LT((sampled(t).acceleration - exact(t).acceleration).norm(), 1e-13) << t;
+    ASSERT_LT((sampled(t).jerk - exact(t).jerk).norm(), 1e-12) << t;
+  }
+  const QuadrotorSim sim(Options());
+  const FeasibilityReport a = sim.Run(sampled, 1.0, Limits(10.0, 10.0));
+  const FeasibilityReport b = sim.Run(exact, 1.0, Limits(10.0, 10.0));
+  EXPECT_NEAR(a.max_acceleration_ratio, b.max_acceleration_ratio, 1e-12);
+  EXPECT_NEAR(a.max_position_error, b.max_position_error, 1e-12);
+}
+
 TEST(QuadrotorSim, JerkLimitClipsEveryCommand) {
   QuadrotorSimOptions o = Options();
   o.initial_position_error = Eigen::Vector3d(0.1, -0.2, 0.0);
