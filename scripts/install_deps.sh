@@ -36,6 +36,7 @@ TEST_PACKAGES=(
   python3-cvxopt python3-numpy      # tests/temporal/cvxopt_cross_check.py (second solver)
   pybind11-dev python3-dev          # the Python module (TIMEOPT_BUILD_PYTHON)
   python3-pytest python3-scipy      # tests/python (pytest; scipy.sparse for the conic solver)
+  python3-jsonschema                # tests/io/validate_schemas.py (docs/schema against real outputs)
 )
 
 # Fuzzing (scripts/fuzz.sh, TIMEOPT_BUILD_FUZZERS).
