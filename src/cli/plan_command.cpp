@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -44,6 +45,7 @@ struct PlanArgs {
   std::string map, start, goal, config, output, plot;
   std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
   bool print_config = false;
+  bool verbose = false, quiet = false;
   std::string unknown = ToString(UnknownSpace::kFree);
   std::optional<double> max_velocity, max_acceleration, max_jerk, robot_radius;
   double region_margin = kDefaultRegionMargin;  // metres around start and goal; see --region-margin
@@ -128,20 +130,30 @@ int RunPlan(PlanArgs args) {
   }
   const Eigen::Vector3d start = ParsePoint(args.start, "--start");
   const Eigen::Vector3d goal = ParsePoint(args.goal, "--goal");
-  const PlannerOptions options = OptionsFrom(args);
+  PlannerOptions options = OptionsFrom(args);
+  // --verbose: one line per stage on stderr as it ends.
+  const auto progress = [&args](const std::string& stage, double ms, const std::string& outcome) {
+    if (!args.verbose) return;
+    std::cerr << "timeopt plan: " << stage << ": " << std::fixed << std::setprecision(1) << ms << " ms"
+              << std::defaultfloat << std::setprecision(6) << (outcome.empty() ? "" : ", " + outcome) << "\n";
+  };
+  options.on_stage = progress;
 
   using Clock = std::chrono::steady_clock;
   UnknownSpace unknown = UnknownSpace::kFree;
   if (!FromString(args.unknown, &unknown)) {
     throw std::invalid_argument("--unknown: expected " + EnumChoices(kUnknownSpaces));
   }
-  const OccupancyMap map = OccupancyMap::Load(args.map, unknown);
   auto t = Clock::now();
+  const OccupancyMap map = OccupancyMap::Load(args.map, unknown);
+  progress("map", std::chrono::duration<double, std::milli>(Clock::now() - t).count(), args.map);
+  t = Clock::now();
   const Eigen::AlignedBox3d region = PlanRegion(start, goal, args.region_margin);
   const int64_t budget = args.max_memory_mib * 1024 * 1024;
   const Esdf esdf =
       args.whole_map ? Esdf::FromMap(map, std::nullopt, budget) : Esdf::FromMapRegion(map, region, budget);
   const double esdf_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+  progress("esdf", esdf_ms, std::to_string(esdf.box().num_voxels()) + " voxels");
   Planner planner(esdf);
   const PlanResult plan = planner.Plan(start, goal, options);
 
@@ -178,10 +190,13 @@ int RunPlan(PlanArgs args) {
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
     // The trajectory flown by the default jerk-input quadrotor from the start state (a hover unless
     // --start-velocity / --start-acceleration; see `timeopt simulate`).
+    t = Clock::now();
     try {
       const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(
           trajectory, options.limits, options.start_velocity, options.start_acceleration);
       summary["flight"] = FlightSummary(flight, options.limits);
+      progress("flight", std::chrono::duration<double, std::milli>(Clock::now() - t).count(),
+               flight.feasible ? "the limits hold" : flight.message);
     } catch (const std::invalid_argument& e) {
       summary["flight"] = {{"error", e.what()}};
     }
@@ -196,7 +211,7 @@ int RunPlan(PlanArgs args) {
       summary["plot"] = args.plot;
     }
   }
-  std::cout << summary.dump(2) << "\n";
+  if (!args.quiet) std::cout << summary.dump(2) << "\n";
   if (!ok) std::cerr << "timeopt: plan: " << ToString(plan.status) << ": " << plan.message << "\n";
   return ExitCodeFor(plan.status);
 }
@@ -252,6 +267,8 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_flag("--whole-map", args->whole_map, "The distance field covers the whole map (no region of interest)");
   AddMemoryBudgetOption(sub, &args->max_memory_mib);
+  sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr as it ends (map, ESDF, search, spatial, check, temporal)");
+  sub->add_flag("-q,--quiet", args->quiet, "Print no summary (the files are still written; the exit code says how it went)");
   sub->add_flag("--print-config", args->print_config,
                "Print the complete planner configuration (the defaults, --config and the flags) as JSON "
                "for --config, and plan nothing");

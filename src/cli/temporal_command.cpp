@@ -137,6 +137,7 @@ struct WaypointsArgs {
   std::string constraint_mode = ToString(kFlightConstraintMode);
   std::string out_dir = "results";
   double rate = kDefaultSampleRateHz;
+  bool verbose = false, quiet = false, json = false;
 };
 
 std::string FormatNumber(double value) {
@@ -170,8 +171,19 @@ int RunWaypoints(const WaypointsArgs& args) {
   EnsureParentDirectory((dir / "curve.json").string());
   WriteCurveJson(problem.curve, (dir / "curve.json").string());
 
+  if (args.verbose) {
+    std::cerr << "timeopt waypoints: curve: " << args.kind << ", " << problem.curve.num_pieces() << " pieces\n";
+  }
   const auto solver = MakeTemporalSolver(ParseBackend(args.solver));
   const TemporalResult result = solver->Solve(problem);
+  if (args.verbose) {
+    std::cerr << "timeopt waypoints: temporal: " << std::fixed << std::setprecision(1)
+              << 1e3 * (result.build_time_seconds + result.solve_time_seconds) << " ms" << std::defaultfloat
+              << std::setprecision(6) << ", " << ToString(result.status) << ", " << result.method << ", T "
+              << result.total_time << " s";
+    if (result.scp_iterations > 0) std::cerr << ", " << result.scp_iterations << " convex solves";
+    std::cerr << "\n";
+  }
   if (!result.is_success()) {
     WriteTextFile((dir / "result.json").string(), TemporalResultToJson(result));
     std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
@@ -188,6 +200,9 @@ int RunWaypoints(const WaypointsArgs& args) {
     const FeasibilityReport flight = sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity,
                                                    problem.boundary.start_acceleration);
     result_json["flight"] = FlightSummary(flight, problem.limits);
+    if (args.verbose) {
+      std::cerr << "timeopt waypoints: flight: " << (flight.feasible ? "the limits hold" : flight.message) << "\n";
+    }
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
           << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
           << ", max |a|/amax " << flight.max_acceleration_ratio << QuadrotorRatios(flight) << " ("
@@ -200,6 +215,11 @@ int RunWaypoints(const WaypointsArgs& args) {
   }
   WriteTextFile((dir / "result.json").string(), result_json.dump(2) + "\n");
 
+  if (args.json) {
+    std::cout << result_json.dump(2) << "\n";
+    return kExitOk;
+  }
+  if (args.quiet) return kExitOk;
   std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
             << " curve, " << problem.curve.num_pieces() << " pieces, length "
             << problem.curve.ArcLength(1e-9) << " m)\n"
@@ -280,6 +300,9 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
+  sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr (curve, temporal, flight)");
+  sub->add_flag("-q,--quiet", args->quiet, "Print nothing on stdout (the files are still written)");
+  sub->add_flag("--json", args->json, "Print result.json (the result and its flight block) instead of the summary");
   sub->callback([args, &run] { run = [args] { return RunWaypoints(*args); }; });
 }
 

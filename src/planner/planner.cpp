@@ -236,6 +236,11 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   auto t = Clock::now();
   const PathSearchResult path = search_.Search(start, goal, search);
   result.times.search_ms = MillisecondsSince(t);
+  const auto report = [&options](const char* stage, double ms, const std::string& outcome) {
+    if (options.on_stage) options.on_stage(stage, ms, outcome);
+  };
+  report("search", result.times.search_ms,
+         path.is_success() ? std::to_string(path.waypoints.cols()) + " waypoints" : path.message);
   if (!path.is_success()) return finish(FromSearch(path.status), path.message);
   result.waypoints = path.waypoints;
 
@@ -298,6 +303,9 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     result.spatial = OptimizeSpatialCurve(*esdf_, joints, attempt_options);
     result.times.spatial_ms += MillisecondsSince(t);
     result.spatial_attempts = attempt + 1;
+    report("spatial", MillisecondsSince(t),
+           "attempt " + std::to_string(attempt + 1) + ", " + std::to_string(joints.cols() - 1) + " pieces, " +
+               std::to_string(result.spatial.iterations.size()) + " iterations, " + ToString(result.spatial.status));
     if (!result.spatial.is_usable()) {
       return finish(PlanStatus::kSpatialFailure,
                     std::string("spatial optimization: ") + ToString(result.spatial.status) + ": " +
@@ -317,6 +325,9 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
                                               std::min(required, options.robot_radius + 0.5 * fine_step));
     }
     result.times.check_ms += MillisecondsSince(t);
+    std::ostringstream outcome;
+    outcome << "clearance " << result.min_clearance << " m (required " << required << " m)";
+    report("check", MillisecondsSince(t), outcome.str());
   }
   result.path_length = result.curve.ArcLength(1e-6);
   if (!safe) {
@@ -404,6 +415,13 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     }
   }
   result.times.temporal_ms = MillisecondsSince(t);
+  {
+    std::ostringstream outcome;
+    outcome << ToString(result.temporal.status) << ", " << result.temporal.method << ", T "
+            << result.temporal.total_time << " s";
+    if (result.temporal.scp_iterations > 0) outcome << ", " << result.temporal.scp_iterations << " convex solves";
+    report("temporal", result.times.temporal_ms, outcome.str());
+  }
   switch (result.temporal.status) {
     case TemporalStatus::kOptimal:
       return finish(PlanStatus::kSuccess, "");

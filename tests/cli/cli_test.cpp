@@ -319,6 +319,26 @@ TEST_F(CliTest, PlanPrintsItsCompleteConfiguration) {
   EXPECT_EQ(config["robot_radius"].get<double>(), 0.5);
 }
 
+// --verbose reports each stage on stderr as it ends, --quiet keeps stdout empty, and waypoints'
+// --json prints its result.json (the same bytes as the file) instead of prose.
+TEST_F(CliTest, ProgressQuietAndJsonOutput) {
+  CliRun r = RunCli("plan -v -q -o " + Path("p.csv") + " --plot " + Path("p.png"), "2>" + Path("stderr.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "");
+  const std::string stages = ReadTextFile(Path("stderr.txt"));
+  for (const char* stage : {"map: ", "esdf: ", "search: ", "spatial: ", "check: ", "temporal: ", "flight: "}) {
+    EXPECT_THAT(stages, HasSubstr(std::string("timeopt plan: ") + stage)) << stages;
+  }
+  const std::string waypoints = std::string(TIMEOPT_SOURCE_DIR) + "/examples/waypoints.csv";
+  r = RunCli("waypoints " + waypoints + " --json --out-dir " + Path("wj"), "2>/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, ReadTextFile(Path("wj/result.json")));
+  EXPECT_TRUE(nlohmann::json::parse(r.output)["flight"]["feasible"].get<bool>());
+  r = RunCli("waypoints " + waypoints + " -q --out-dir " + Path("wq3"), "2>/dev/null");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.output, "");
+}
+
 // The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
 // --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
 // JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or

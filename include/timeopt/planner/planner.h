@@ -14,6 +14,7 @@
 
 #include <array>
 #include <memory>
+#include <functional>
 #include <string>
 
 #include <Eigen/Core>
@@ -71,6 +72,10 @@ struct PlannerOptions {
   // time-coupled formulation max_velocity / max_acceleration are overwritten from `limits`
   // (smallest axis).
   SpatialOptimizerOptions spatial;
+  // Called as each stage ends (the library prints nothing; `timeopt plan --verbose` prints these):
+  // the stage ("search", "spatial", "check", "temporal"), its duration in milliseconds and a short
+  // description of its outcome. Not part of the JSON configuration. Empty: not called.
+  std::function<void(const std::string& stage, double milliseconds, const std::string& outcome)> on_stage;
   // Attempts of the spatial stage: attempt k (0-based) multiplies the collision weight by
   // retry_collision_weight_factor^k and divides max_segment_length by 2^k. 4 attempts.
   int max_attempts = 4;
