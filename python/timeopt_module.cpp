@@ -24,6 +24,7 @@
 #include <pybind11/stl.h>
 
 #include "timeopt/conic/cbf.h"
+#include "timeopt/version.h"
 #include "timeopt/conic/problem.h"
 #include "timeopt/conic/solver.h"
 #include "timeopt/core/errors.h"
@@ -346,6 +347,7 @@ PYBIND11_MODULE(timeopt, m) {
       "Minimum-time quadrotor trajectories by spatial-temporal decoupling (Gao et al., IROS 2018): curves, the\n"
       "temporal problem solved by our conic solver or Ipopt, trajectories, maps, the planner, a simulated\n"
       "quadrotor and the conic solver itself. SI units; arrays are float64 numpy arrays, points (N, 3).";
+  m.attr("__version__") = TIMEOPT_VERSION_STRING;
 
   // A file that cannot be opened or written is an OSError, as Python's own open() makes it.
   py::register_exception<FileError>(m, "FileError", PyExc_OSError);
@@ -380,7 +382,29 @@ PYBIND11_MODULE(timeopt, m) {
       .def_readwrite("max_thrust", &VehicleLimits::max_thrust)
       .def_readwrite("min_thrust", &VehicleLimits::min_thrust)
       .def_readwrite("max_tilt", &VehicleLimits::max_tilt)
-      .def_readwrite("gravity", &VehicleLimits::gravity);
+      .def_readwrite("gravity", &VehicleLimits::gravity)
+      .def("__repr__", [](const VehicleLimits& l) {
+        std::ostringstream s;
+        const auto axes = [&s](const Eigen::Vector3d& v) { s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]"; };
+        s << "Limits(max_velocity=";
+        axes(l.max_velocity);
+        s << ", max_acceleration=";
+        axes(l.max_acceleration);
+        s << ", max_jerk=";
+        if (l.max_jerk) axes(*l.max_jerk);
+        else s << "None";
+        const auto optional = [&s](const char* name, const std::optional<double>& v) {
+          if (v) s << ", " << name << "=" << *v;
+        };
+        optional("max_speed", l.max_speed);
+        optional("max_acceleration_norm", l.max_acceleration_norm);
+        optional("max_thrust", l.max_thrust);
+        optional("min_thrust", l.min_thrust);
+        optional("max_tilt", l.max_tilt);
+        optional("max_acceleration_change", l.max_acceleration_change);
+        s << ")";
+        return s.str();
+      });
 
   // ---- curves ----
   py::class_<PiecewiseCurve>(m, "Curve", "A piecewise polynomial curve f(s), each piece on its own s in [0, 1].")
@@ -695,7 +719,18 @@ PYBIND11_MODULE(timeopt, m) {
             return Trajectory(r.curve, r.temporal.profile);
           },
           "The planned trajectory (successful plans only).")
-      .def("summary", [](const PlanResult& r) { return PlanResultToJson(r); }, "The plan JSON summary of `timeopt plan`.");
+      .def(
+          "summary",
+          [](const PlanResult& r) { return py::module_::import("json").attr("loads")(PlanResultToJson(r)); },
+          "The plan's summary as a dict (the plan's own keys of `timeopt plan`'s JSON).")
+      .def("to_json", [](const PlanResult& r) { return PlanResultToJson(r); }, "The plan's summary as JSON text.")
+      .def("__repr__", [](const PlanResult& r) {
+        std::ostringstream s;
+        s << "<PlanResult " << ToString(r.status);
+        if (r.is_success()) s << " T=" << r.temporal.total_time << " s, " << r.path_length << " m, " << r.curve.num_pieces() << " pieces";
+        s << ">";
+        return s.str();
+      });
 
   m.def(
       "plan",
@@ -738,7 +773,13 @@ PYBIND11_MODULE(timeopt, m) {
       .def_readonly("max_position_error", &FeasibilityReport::max_position_error)
       .def_readonly("final_position_error", &FeasibilityReport::final_position_error)
       .def_readonly("steps", &FeasibilityReport::steps)
-      .def("to_json", [](const FeasibilityReport& r) { return FeasibilityReportToJson(r); });
+      .def("to_json", [](const FeasibilityReport& r) { return FeasibilityReportToJson(r); })
+      .def("__repr__", [](const FeasibilityReport& r) {
+        std::ostringstream s;
+        s << "<FlightReport " << (r.feasible ? "feasible" : "infeasible") << " |v|/vmax=" << r.max_velocity_ratio
+          << " |a|/amax=" << r.max_acceleration_ratio << " tolerance=" << r.tolerance << ">";
+        return s.str();
+      });
 
   m.def(
       "simulate",

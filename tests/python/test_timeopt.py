@@ -223,7 +223,8 @@ def test_plan_on_the_shipped_forest_matches_the_command_line(tmp_path):
     assert plan.status == timeopt.PlanStatus.success, plan.message
     summary = cli_json("plan", "--output", str(tmp_path / "plan.csv"), "--plot", str(tmp_path / "plan.png"))
     assert plan.total_time == summary["total_time"]
-    summary_py = json.loads(plan.summary())
+    summary_py = plan.summary()
+    assert summary_py == json.loads(plan.to_json())
     assert summary_py["total_time"] == plan.total_time
     trajectory = plan.trajectory()
     report = timeopt.simulate(trajectory, timeopt.Limits(max_velocity=2, max_acceleration=2, max_jerk=10))
@@ -314,3 +315,11 @@ def test_one_flight_verdict_for_the_shipped_waypoints(tmp_path):
     sampled_report = json.loads(sampled.stdout)
     assert sampled_report["feasible"] and sampled_report["tolerance"] == 0.01
     assert sampled_report["max_acceleration_ratio"] <= 1.01
+
+
+def test_version_and_reprs():
+    # The version is the C++ library's (CMake's project version, also `timeopt --version`).
+    version = subprocess.run([CLI, "--version"], capture_output=True, text=True, check=True).stdout
+    assert timeopt.__version__ in version
+    assert repr(timeopt.Limits()) == "Limits(max_velocity=[2, 2, 2], max_acceleration=[2, 2, 2], max_jerk=[10, 10, 10])"
+    assert repr(timeopt.Limits(max_jerk=None, max_speed=3)).endswith("max_jerk=None, max_speed=3)")
