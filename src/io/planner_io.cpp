@@ -1,5 +1,6 @@
 #include "timeopt/io/planner_io.h"
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <set>
@@ -132,7 +133,11 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
     const json& s = root.at("spatial");
     const std::string where = context + ".spatial";
     internal::RequireObject(s, where);
-    internal::RejectUnknownKeys(s, Keys(kSpatialReals, kSpatialInts, {"formulation"}), where);
+    internal::RejectUnknownKeys(s, Keys(kSpatialReals, kSpatialInts, {"formulation", "parameterization"}), where);
+    if (s.contains("parameterization")) {
+      o.spatial.parameterization =
+          internal::EnumField(s.at("parameterization"), where + ".parameterization", kSpatialParameterizations);
+    }
     if (s.contains("formulation")) {
       o.spatial.formulation =
           internal::EnumField(s.at("formulation"), where + ".formulation", kSpatialFormulations);
@@ -175,7 +180,8 @@ std::string PlannerConfigToJson(const PlannerOptions& o, int indent) {
   root["temporal"] = {{"K", o.temporal_cells_per_piece},
                       {"rho", o.rho},
                       {"constraint_mode", ToString(o.constraint_mode)}};
-  json spatial = {{"formulation", ToString(o.spatial.formulation)}};
+  json spatial = {{"formulation", ToString(o.spatial.formulation)},
+                  {"parameterization", ToString(o.spatial.parameterization)}};
   WriteKeys(o.spatial, kSpatialReals, kSpatialInts, &spatial);
   root["spatial"] = spatial;
   json search;
@@ -197,6 +203,8 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
   j["total_time"] = value_if(ok, plan.temporal.total_time);
   j["path_length"] = value_if(has_curve, plan.path_length);
   j["min_clearance"] = value_if(has_curve, plan.min_clearance);
+  j["min_interior_speed"] = value_if(std::isfinite(plan.min_interior_speed), plan.min_interior_speed);
+  j["min_curvature_radius"] = value_if(std::isfinite(plan.min_curvature_radius), plan.min_curvature_radius);
   j["pieces"] = plan.curve.num_pieces();
   j["waypoints"] = static_cast<int>(plan.waypoints.cols());
   j["spatial_attempts"] = plan.spatial_attempts;

@@ -9,12 +9,31 @@
 #include <vector>
 
 #include "timeopt/core/enum_strings.h"
+#include "timeopt/trajectory/trajectory.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// PlanResult's min_interior_speed and min_curvature_radius (see planner.h): on a 10 ms grid more
+// than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature).
+void CurveQuality(PlanResult* result) {
+  const Trajectory trajectory(result->curve, result->temporal.profile);
+  const double T = trajectory.duration();
+  double slowest = std::numeric_limits<double>::infinity(), radius = std::numeric_limits<double>::infinity();
+  for (double t = 1.0; t <= T - 1.0; t += 0.01) {
+    const TrajectoryState state = trajectory.Evaluate(t);
+    const double speed = state.velocity.norm();
+    slowest = std::min(slowest, speed);
+    const double bend = state.velocity.cross(state.acceleration).norm();
+    if (bend > 0.0) radius = std::min(radius, speed * speed * speed / bend);
+  }
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  result->min_interior_speed = std::isfinite(slowest) ? slowest : kNaN;
+  result->min_curvature_radius = std::isfinite(radius) ? radius : kNaN;
+}
 
 double MillisecondsSince(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
@@ -422,6 +441,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     if (result.temporal.scp_iterations > 0) outcome << ", " << result.temporal.scp_iterations << " convex solves";
     report("temporal", result.times.temporal_ms, outcome.str());
   }
+  if (result.temporal.status == TemporalStatus::kOptimal) CurveQuality(&result);
   switch (result.temporal.status) {
     case TemporalStatus::kOptimal:
       return finish(PlanStatus::kSuccess, "");

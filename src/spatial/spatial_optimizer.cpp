@@ -59,6 +59,19 @@ bool FromString(const std::string& text, SpatialFormulation* formulation) {
   return EnumFromString(text, kSpatialFormulations, formulation);
 }
 
+const char* ToString(SpatialParameterization parameterization) {
+  switch (parameterization) {
+    case SpatialParameterization::kUniform: return "uniform";
+    case SpatialParameterization::kChordal: return "chordal";
+    case SpatialParameterization::kCentripetal: return "centripetal";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& text, SpatialParameterization* parameterization) {
+  return EnumFromString(text, kSpatialParameterizations, parameterization);
+}
+
 const char* ToString(SpatialStatus status) {
   switch (status) {
     case SpatialStatus::kConverged: return "converged";
@@ -132,7 +145,8 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
   const int m = static_cast<int>(waypoints.cols()) - 1;
   const bool coupled = options.formulation == SpatialFormulation::kTimeCoupled;
 
-  // Piece durations: 1 in the spatial formulation, heuristic in the baseline.
+  // Piece durations: in s for the spatial formulation (1, or by chord; mean 1), heuristic times in
+  // the baseline.
   std::vector<double> durations(m, 1.0);
   if (coupled) {
     for (int i = 0; i < m; ++i) {
@@ -140,7 +154,18 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
       durations[i] = std::max(chord / options.heuristic_speed, options.min_piece_duration);
     }
     result.durations = durations;
+  } else if (options.parameterization != SpatialParameterization::kUniform) {
+    double sum = 0.0;
+    for (int i = 0; i < m; ++i) {
+      const double chord = (waypoints.col(i + 1) - waypoints.col(i)).norm();
+      durations[i] = options.parameterization == SpatialParameterization::kChordal ? chord : std::sqrt(chord);
+      sum += durations[i];
+    }
+    // Coincident joints (a zero chord) keep a small length: 1% of the mean.
+    const double mean = sum > 0.0 ? sum / m : 1.0;
+    for (double& d : durations) d = std::max(d / mean, 0.01);
   }
+  const bool scaled = coupled || options.parameterization != SpatialParameterization::kUniform;
 
   // Initial joint states from the minimum-jerk spline in s (rest to rest, or from the given start
   // derivatives).
@@ -156,13 +181,16 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     Eigen::Map<Eigen::Vector3d> position(x);
     position = waypoints.col(j);
     if (j == 0) {  // the fixed start: at rest, or in motion
-      Eigen::Map<Eigen::Vector3d>(x + 3, 3) = options.start_tangent;
-      Eigen::Map<Eigen::Vector3d>(x + 6, 3) = options.start_curvature;
+      // Given per unit s of the first output piece (spatial) or per second (baseline); the joints
+      // hold derivatives per unit of the optimized parameter, in which that piece spans durations[0].
+      const double d0 = coupled ? 1.0 : durations[0];
+      Eigen::Map<Eigen::Vector3d>(x + 3, 3) = options.start_tangent / d0;
+      Eigen::Map<Eigen::Vector3d>(x + 6, 3) = options.start_curvature / (d0 * d0);
       continue;
     }
     if (j == m) continue;  // rest at the fixed goal
     Eigen::Vector3d d1 = initial.Evaluate(j, 0.0, 1), d2 = initial.Evaluate(j, 0.0, 2);
-    if (coupled) {
+    if (scaled) {
       const double t = 0.5 * (durations[j - 1] + durations[j]);
       d1 /= t;
       d2 /= t * t;

@@ -15,6 +15,7 @@
 #include <array>
 #include <memory>
 #include <functional>
+#include <limits>
 #include <string>
 
 #include <Eigen/Core>
@@ -162,6 +163,12 @@ struct PlanResult {
   // Smallest clearance on the dense check, metres: the exact distance to occupied voxel cubes
   // near obstacles, the ESDF elsewhere.
   double min_clearance = 0.0;
+  // Curve quality, for successful plans (NaN otherwise), on a 10 ms grid more than 1 s from either
+  // end (NaN for a plan shorter than 2 s): the smallest speed, m/s, and the smallest radius of
+  // curvature of the path (|v|^3 / |v x a|), metres (infinite, so NaN, on a straight line). A sharp
+  // bend the trajectory must brake for shows in both.
+  double min_interior_speed = std::numeric_limits<double>::quiet_NaN();
+  double min_curvature_radius = std::numeric_limits<double>::quiet_NaN();
   // A start in motion that no jerk-limited profile can leave within the limits: the largest
   // lambda (within 0.01) for which the start velocity times lambda and the start acceleration times
   // lambda^2 can be flown; the trajectory starts from that state. 1: the given state.
