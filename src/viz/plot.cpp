@@ -71,13 +71,16 @@ void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path,
     const double px0 = left, px1 = width - right, py0 = y0 + top, py1 = y0 + panel_height - bottom;
 
     const auto ty = [&](double v) { return panel.log_y ? std::log10(v) : v; };
+    const auto tx = [&](double v) { return panel.log_x ? std::log10(v) : v; };
+    const auto skipped = [&](double x, double y) {
+      return !std::isfinite(x) || !std::isfinite(y) || (panel.log_y && y <= 0.0) || (panel.log_x && x <= 0.0);
+    };
     double xmin = std::numeric_limits<double>::infinity(), xmax = -xmin, ymin = xmin, ymax = -xmin;
     for (const auto& s : panel.series) {
       for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-        if (panel.log_y && s.y[i] <= 0.0) continue;
-        xmin = std::min(xmin, s.x[i]);
-        xmax = std::max(xmax, s.x[i]);
+        if (skipped(s.x[i], s.y[i])) continue;
+        xmin = std::min(xmin, tx(s.x[i]));
+        xmax = std::max(xmax, tx(s.x[i]));
         ymin = std::min(ymin, ty(s.y[i]));
         ymax = std::max(ymax, ty(s.y[i]));
       }
@@ -88,20 +91,22 @@ void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path,
     const double pad = 0.06 * (ymax - ymin);
     ymin -= pad;
     ymax += pad;
-    const auto X = [&](double v) { return px0 + (v - xmin) / (xmax - xmin) * (px1 - px0); };
+    const auto X = [&](double v) { return px0 + (tx(v) - xmin) / (xmax - xmin) * (px1 - px0); };
+    const auto XT = [&](double t) { return px0 + (t - xmin) / (xmax - xmin) * (px1 - px0); };  // t: axis units
     const auto Y = [&](double v) { return py1 - (ty(v) - ymin) / (ymax - ymin) * (py1 - py0); };
 
     // grid and ticks
     cairo_set_font_size(cr, 12);
     cairo_set_line_width(cr, 1.0);
-    const double xs = NiceStep(xmax - xmin, 8);
+    // A logarithmic axis is ticked at whole decades, labelled with their values (0.1, 1, 10).
+    const double xs = panel.log_x ? std::max(1.0, std::round(NiceStep(xmax - xmin, 8))) : NiceStep(xmax - xmin, 8);
     for (double v = std::ceil(xmin / xs) * xs; v <= xmax + 1e-9 * xs; v += xs) {
       cairo_set_source_rgb(cr, 0.9, 0.9, 0.9);
-      cairo_move_to(cr, X(v), py0);
-      cairo_line_to(cr, X(v), py1);
+      cairo_move_to(cr, XT(v), py0);
+      cairo_line_to(cr, XT(v), py1);
       cairo_stroke(cr);
       cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
-      Text(cr, X(v), py1 + 6, Format(v), 0.5, 1.0);
+      Text(cr, XT(v), py1 + 6, Format(panel.log_x ? std::pow(10.0, v) : v), 0.5, 1.0);
     }
     const double ys = NiceStep(ymax - ymin, 5);
     for (double v = std::ceil(ymin / ys) * ys; v <= ymax + 1e-9 * ys; v += ys) {
@@ -128,7 +133,7 @@ void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path,
       cairo_set_dash(cr, dash, s.dashed ? 2 : 0, 0);
       bool pen = false;
       for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]) || (panel.log_y && s.y[i] <= 0)) {
+        if (skipped(s.x[i], s.y[i])) {
           pen = false;
           continue;
         }

@@ -23,6 +23,7 @@ struct PlotPanel {
   std::string y_label;
   std::vector<PlotSeries> series;
   bool log_y = false;  // logarithmic y axis (values <= 0 are skipped)
+  bool log_x = false;  // logarithmic x axis (values <= 0 are skipped)
 };
 
 // Writes the panels stacked vertically into a PNG. Throws std::invalid_argument for mismatched
