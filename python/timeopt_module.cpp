@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -599,16 +600,30 @@ PYBIND11_MODULE(timeopt, m) {
       "Wall seconds of `repeats` solves timed inside C++ by one reusable solver (no Python in the loop): the\n"
       "reference for the module's own overhead (benchmarks/python_overhead.py).");
 
-  py::class_<TemporalSolver>(m, "Solver", "A reusable temporal solver (keeps its workspaces between solves).")
-      .def(py::init([](const std::string& solver) { return MakeTemporalSolver(BackendFrom(solver)); }),
+  // A TemporalSolver keeps workspaces between solves and is not safe to call from two threads at
+  // once: the Python object serializes its own solves (a second thread waits, with the GIL
+  // released, for the first to finish). Threads that should solve in parallel use a Solver each.
+  struct SharedSolver {
+    std::unique_ptr<TemporalSolver> solver;
+    std::mutex mutex;
+  };
+  py::class_<SharedSolver>(m, "Solver",
+                           "A reusable temporal solver (keeps its workspaces between solves). Safe to share between "
+                           "threads: its solves run one at a time; use one Solver per thread to solve in parallel.")
+      .def(py::init([](const std::string& solver) {
+             auto shared = std::make_unique<SharedSolver>();
+             shared->solver = MakeTemporalSolver(BackendFrom(solver));
+             return shared;
+           }),
            py::arg("solver") = "socp")
       .def(
           "solve",
-          [](TemporalSolver& s, const TemporalProblem& p) {
+          [](SharedSolver& s, const TemporalProblem& p) {
             py::gil_scoped_release release;
-            return s.Solve(p);
+            const std::lock_guard<std::mutex> lock(s.mutex);
+            return s.solver->Solve(p);
           },
-          py::arg("problem"), "Solves, releasing the GIL.");
+          py::arg("problem"), "Solves, releasing the GIL; concurrent calls on one Solver run one after the other.");
 
   // ---- trajectories ----
   py::class_<Trajectory>(m, "Trajectory", "A curve traversed by a temporal profile: p, v, a, j against time.")

@@ -75,8 +75,9 @@ namespace {
 // Adaptive Simpson on g over [a, b]; whole = Simpson estimate over [a, b].
 template <typename F>
 double AdaptiveSimpson(const F& g, double a, double b, double fa, double fm, double fb,
-                       double whole, double tolerance, int depth) {
+                       double whole, double tolerance, int depth, long* budget) {
   const double m = 0.5 * (a + b);
+  *budget -= 2;
   const double lm = 0.5 * (a + m), rm = 0.5 * (m + b);
   const double flm = g(lm), frm = g(rm);
   const double left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
@@ -84,11 +85,13 @@ double AdaptiveSimpson(const F& g, double a, double b, double fa, double fm, dou
   const double delta = left + right - whole;
   // The depth limit bounds the work for pathological input; at depth 40 the interval is 1e-12
   // of a piece, far below any tolerance a caller can ask for in double precision.
-  if (depth >= 40 || std::abs(delta) <= 15.0 * tolerance) {
+  // The evaluation budget bounds the whole recursion (2^40 leaves would be a hang): past it, each
+  // interval keeps its extrapolated estimate.
+  if (depth >= 40 || *budget <= 0 || std::abs(delta) <= 15.0 * tolerance) {
     return left + right + delta / 15.0;  // Richardson extrapolation
   }
-  return AdaptiveSimpson(g, a, m, fa, flm, fm, left, 0.5 * tolerance, depth + 1) +
-         AdaptiveSimpson(g, m, b, fm, frm, fb, right, 0.5 * tolerance, depth + 1);
+  return AdaptiveSimpson(g, a, m, fa, flm, fm, left, 0.5 * tolerance, depth + 1, budget) +
+         AdaptiveSimpson(g, m, b, fm, frm, fb, right, 0.5 * tolerance, depth + 1, budget);
 }
 
 }  // namespace
@@ -113,12 +116,20 @@ double PiecewiseCurve::ArcLength(double tolerance) const {
       whole[k] = (b - a) / 6.0 * (fa[k] + 4.0 * fm[k] + fb[k]);
       estimate += whole[k];
     }
+    if (!std::isfinite(estimate)) {
+      // |f'| overflows double precision (coordinates near 1e154 m and beyond).
+      throw std::invalid_argument("PiecewiseCurve::ArcLength: the derivative of piece " +
+                                  std::to_string(&p - pieces_.data()) +
+                                  " is not finite (coordinates too large for double precision)");
+    }
     // Not below 1e-13 of the piece's length: there the differences are the rounding of |f'| (on a
     // curve 1e8 m long a 1e-9 m tolerance was never met, and the recursion went 2^40 wide: a hang).
     const double piece_tolerance = std::max(per_piece, 1e-13 * std::abs(estimate));
+    // At most ~2^20 evaluations per piece (a few ms): far more than a smooth piece needs.
+    long budget = 1L << 20;
     for (int k = 0; k < panels; ++k) {
       const double a = static_cast<double>(k) / panels, b = static_cast<double>(k + 1) / panels;
-      total += AdaptiveSimpson(speed, a, b, fa[k], fm[k], fb[k], whole[k], piece_tolerance / panels, 0);
+      total += AdaptiveSimpson(speed, a, b, fa[k], fm[k], fb[k], whole[k], piece_tolerance / panels, 0, &budget);
     }
   }
   return total;

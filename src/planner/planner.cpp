@@ -150,7 +150,8 @@ constexpr double kStartScaleFirstGuess = 0.9;
 constexpr double kStartScaleTolerance = 0.01;
 
 // Samples of a piece at chord steps of at most `step` (polygon length at 16 samples, +25%).
-void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* points) {
+// The length of the 16-chord polyline through the piece, metres.
+double PolylineLength(const PolynomialPiece& piece) {
   double length = 0.0;
   Eigen::Vector3d previous = piece.Evaluate(0.0);
   for (int k = 1; k <= 16; ++k) {
@@ -158,6 +159,13 @@ void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* po
     length += (p - previous).norm();
     previous = p;
   }
+  return length;
+}
+
+// Samples the piece at most `step` apart along its chords (Plan checks first that its length is
+// bounded by the field's size).
+void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* points) {
+  const double length = PolylineLength(piece);
   const int n = std::max(16, static_cast<int>(std::ceil(1.25 * length / step)));
   points->resize(3, n + 1);
   for (int k = 0; k <= n; ++k) points->col(k) = piece.Evaluate(static_cast<double>(k) / n);
@@ -314,7 +322,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
     const double factor = std::pow(options.retry_collision_weight_factor, attempt);
     SpatialOptimizerOptions attempt_options = spatial;
-    attempt_options.collision_weight = spatial.collision_weight * factor;
+    attempt_options.collision_weight = std::min(kMaxSpatialWeight, spatial.collision_weight * factor);
     const Waypoints joints =
         SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
     hold_start(joints, &attempt_options);
@@ -331,6 +339,19 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
                         result.spatial.message);
     }
     result.curve = result.spatial.curve;
+    // A piece longer than twice the field's diagonal leaves the field: nothing to check it against
+    // (and its dense check would need a sample count without bound).
+    const Eigen::AlignedBox3d field = esdf_->box().Metric(esdf_->resolution());
+    const double reach = 2.0 * field.diagonal().norm() + 1.0;
+    for (int i = 0; i < result.curve.num_pieces(); ++i) {
+      const double length = PolylineLength(result.curve.piece(i));
+      if (!(length <= reach)) {
+        std::ostringstream s;
+        s << "the optimized curve leaves the distance field (piece " << i << " is " << length
+          << " m long, the field's diagonal " << field.diagonal().norm() << " m)";
+        return finish(PlanStatus::kSpatialFailure, s.str());
+      }
+    }
     t = Clock::now();
     result.min_clearance =
         MinVoxelClearance(*esdf_, result.curve, options.clearance_check_step, exact_below);

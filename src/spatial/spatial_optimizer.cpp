@@ -90,9 +90,15 @@ bool SpatialOptimizerOptions::IsValid(std::string* error) const {
   const auto fail = [error](const std::string& field, const std::string& expected, double got) {
     return internal::FailOption(error, field, expected, got);
   };
-  if (!NonNegative(smoothness_weight)) return fail("smoothness_weight", "a finite number >= 0", smoothness_weight);
-  if (!NonNegative(collision_weight)) return fail("collision_weight", "a finite number >= 0", collision_weight);
-  if (!NonNegative(length_weight)) return fail("length_weight", "a finite number >= 0", length_weight);
+  // Weights are relative to each other; above kMaxSpatialWeight a term's squared residuals leave
+  // double precision's useful range (the sum of squares overflows, or swamps the other terms by
+  // more than 16 digits), and the optimizer returns non-finite curves.
+  const auto weight = [&](const char* name, double value) {
+    return NonNegative(value) && value <= kMaxSpatialWeight ? true : fail(name, "a number in [0, 1e9]", value);
+  };
+  if (!weight("smoothness_weight", smoothness_weight)) return false;
+  if (!weight("collision_weight", collision_weight)) return false;
+  if (!weight("length_weight", length_weight)) return false;
   if (!std::isfinite(safe_distance)) return fail("safe_distance", "a finite number", safe_distance);
   if (!Positive(penalty_decay_length)) return fail("penalty_decay_length", "a positive number", penalty_decay_length);
   if (collision_samples_per_piece < 1 || collision_samples_per_piece > 64) {
@@ -115,7 +121,7 @@ bool SpatialOptimizerOptions::IsValid(std::string* error) const {
     if (!Positive(min_piece_duration)) return fail("min_piece_duration", "a positive number", min_piece_duration);
     if (!Positive(max_velocity)) return fail("max_velocity", "a positive number", max_velocity);
     if (!Positive(max_acceleration)) return fail("max_acceleration", "a positive number", max_acceleration);
-    if (!NonNegative(dynamic_weight)) return fail("dynamic_weight", "a finite number >= 0", dynamic_weight);
+    if (!weight("dynamic_weight", dynamic_weight)) return false;
     if (dynamic_samples_per_piece < 1) {
       return fail("dynamic_samples_per_piece", "an integer >= 1", dynamic_samples_per_piece);
     }
@@ -322,6 +328,13 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
   }
   result.curve = PiecewiseCurve(std::move(pieces));
   result.solve_time_seconds = std::chrono::duration<double>(Clock::now() - started).count();
+  for (int i = 0; i < result.curve.num_pieces(); ++i) {
+    if (!result.curve.piece(i).coefficients().allFinite()) {
+      result.status = SpatialStatus::kFailure;
+      result.message = "the optimized curve is not finite (piece " + std::to_string(i) + ")";
+      break;
+    }
+  }
   return result;
 }
 

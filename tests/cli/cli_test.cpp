@@ -339,6 +339,20 @@ TEST_F(CliTest, ProgressQuietAndJsonOutput) {
   EXPECT_EQ(r.output, "");
 }
 
+// Absurd spatial weights are invalid input naming the key (1e100 once made the optimizer return a
+// curve that the clearance check sampled into gigabytes and a crash); at the cap the plan runs.
+TEST_F(CliTest, AbsurdSpatialWeightsAreRefused) {
+  for (const char* key : {"collision_weight", "smoothness_weight", "length_weight"}) {
+    Write("w.json", std::string(R"({"spatial": {")") + key + R"(": 1e100}})");
+    const CliRun r = RunCli("plan -q --config " + Path("w.json") + " -o " + Path("w.csv"));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr(std::string("spatial.") + key + ": expected a number in [0, 1e9]"));
+  }
+  Write("w.json", R"({"spatial": {"collision_weight": 1e9}})");
+  const CliRun r = RunCli("plan -q --config " + Path("w.json") + " -o " + Path("w.csv"));
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;  // a plan or a named failure, no crash
+}
+
 // The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
 // --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
 // JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or

@@ -160,5 +160,15 @@ TEST(PiecewiseCurveArcLength, HugeCurvesTerminateAndAreAccurate) {
   EXPECT_NEAR(c.ArcLength(1e-9), reference, 1e-9 * reference);
 }
 
+// Two waypoints 1e154 m apart: |f'|^2 overflows, so the length is refused with a message (it
+// recursed without end on inf and NaN); 1e150 m still has a length, the chord (a straight line).
+TEST(PiecewiseCurveArcLength, OverflowingCurvesAreRefusedNotHung) {
+  Waypoints w(3, 2);
+  w << 0, 1e154, 0, 0, 0, 0;
+  EXPECT_THROW(MinimumJerkSpline(w).ArcLength(), std::invalid_argument);
+  w << 0, 1e150, 0, 0, 0, 0;
+  EXPECT_NEAR(MinimumJerkSpline(w).ArcLength(), 1e150, 1e-12 * 1e150);
+}
+
 }  // namespace
 }  // namespace timeopt

@@ -49,7 +49,9 @@ class PiecewiseCurve {
   // Arc length integral of |f'(s)| over all pieces, by adaptive Simpson quadrature with the given
   // absolute tolerance (metres), or 1e-13 of each piece's length (the rounding of doubles) where
   // that is larger.
-  // Throws std::invalid_argument for a tolerance that is not positive.
+  // Throws std::invalid_argument for a tolerance that is not positive and finite, and for a piece
+  // whose derivative overflows double precision; its work is bounded (about 2^20 evaluations of
+  // |f'| per piece), so pathological pieces end with the best estimate reached.
   double ArcLength(double tolerance = 1e-9) const;
 
   // Sum over pieces of the exact integral of |f^(order)(s)|^2 ds.

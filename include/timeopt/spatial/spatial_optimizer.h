@@ -68,6 +68,9 @@ enum class SpatialLinearSolver {
   kDenseQr,               // Ceres DENSE_QR: faster for a handful of joints
 };
 
+// The largest weight of a spatial cost term (SpatialOptimizerOptions::IsValid).
+inline constexpr double kMaxSpatialWeight = 1e9;
+
 struct SpatialOptimizerOptions {
   SpatialFormulation formulation = SpatialFormulation::kSpatial;
   // The spatial formulation's piece lengths in s while it optimizes (SpatialParameterization).
