@@ -130,6 +130,14 @@ void TemporalProblem::Validate() const {
     throw std::invalid_argument("discretization.K: expected at least 1 cell per piece, got " +
                                 std::to_string(cells_per_piece));
   }
+  if (limits.max_jerk && cells_per_piece < kMinJerkLimitedCellsPerPiece) {
+    // A piece that starts or ends at rest has a rest cell at that end; with fewer than three cells
+    // no regular cell is left between them, and the answer is infeasible or far off (K = 2 gave
+    // T = 1e6 s on a 5 m line whose optimum is 3.7 s).
+    throw std::invalid_argument("discretization.K: a jerk-limited problem needs at least " +
+                                std::to_string(kMinJerkLimitedCellsPerPiece) + " cells per piece, got " +
+                                std::to_string(cells_per_piece));
+  }
   if (static_cast<long long>(curve.num_pieces()) * cells_per_piece * (limits.max_jerk ? 2 : 1) > kMaxCells) {
     throw std::invalid_argument("discretization.K: " + std::to_string(curve.num_pieces()) + " pieces x " +
                                 std::to_string(cells_per_piece) + " cells is above the " + std::to_string(kMaxCells) +

@@ -129,7 +129,7 @@ Case MakeCase(std::uint64_t seed, int index, const Settings& settings) {
   }
   // K log-uniform in [1, 500]; the jerk-limited rows at most settings.max_jerk_cells.
   int K = static_cast<int>(std::lround(LogUniform(rng, 1.0, 500.0)));
-  if (mode == 2) K = std::min(K, settings.max_jerk_cells);
+  if (mode == 2) K = std::clamp(K, kMinJerkLimitedCellsPerPiece, settings.max_jerk_cells);
   p.cells_per_piece = K;
   if (mode == 1) p.constraint_mode = ConstraintMode::kCertified;
   if (mode == 2) {

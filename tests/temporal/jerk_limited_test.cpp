@@ -347,6 +347,26 @@ TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
   EXPECT_NEAR(socp.total_time, exact.total_time, 1e-12 * exact.total_time);
 }
 
+// Fewer than 3 cells per piece leave a rest-to-rest line no regular cell between its rest cells:
+// invalid input naming K and the smallest that works (K = 2 once answered "optimal" with T = 1e6 s
+// on this line, whose S-curve optimum is 3.7 s; K = 1 "infeasible"). From K = 3 on it is solved,
+// and T falls toward the closed form as K grows (above it: the grid is conservative).
+TEST(JerkLimited, TooFewCellsAreInvalidInputNamingTheSmallestK) {
+  for (const int K : {1, 2}) {
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
+    EXPECT_EQ(r.status, TemporalStatus::kInvalidInput) << K;
+    EXPECT_THAT(r.message, HasSubstr("discretization.K: a jerk-limited problem needs at least 3 cells per piece"));
+  }
+  double previous = std::numeric_limits<double>::infinity();
+  for (const int K : {3, 10, 50}) {
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << K;
+    EXPECT_LT(r.total_time, previous) << K;
+    EXPECT_LT(r.total_time, 2.5 * 3.7) << K;
+    previous = r.total_time;
+  }
+}
+
 TEST(JerkLimited, BadJerkLimitsAreInvalidInputAndUnreachableAccelerationsInfeasible) {
   for (const double bad : {-1.0, 0.0, std::numeric_limits<double>::quiet_NaN()}) {
     TemporalProblem p = JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 1.0, 5.0, 20);

@@ -66,6 +66,10 @@ inline VehicleLimits FlightLimits() {
 }
 inline constexpr ConstraintMode kFlightConstraintMode = ConstraintMode::kCertified;
 
+// The fewest cells per piece of a jerk-limited problem (TemporalProblem::Validate): a piece that
+// starts or ends at rest spends a cell at each such end on the rest, and needs a regular one between.
+inline constexpr int kMinJerkLimitedCellsPerPiece = 3;
+
 // The largest number of cells per piece a problem may ask for: 100000 (ds = 1e-5) is far finer
 // than any use needs, and keeps a problem's memory bounded per piece (a few MB).
 inline constexpr int kMaxCellsPerPiece = 100000;
