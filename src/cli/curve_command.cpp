@@ -16,6 +16,7 @@ struct CurveArgs {
   std::string waypoints;
   std::string kind = "minjerk";
   std::string output;
+  bool json = false;
 };
 
 int RunCurve(const CurveArgs& args) {
@@ -25,9 +26,17 @@ int RunCurve(const CurveArgs& args) {
   WriteCurveJson(curve, args.output);
 
   const ContinuityReport report = curve.Continuity(4);
+  const double length = curve.ArcLength(1e-9);
+  if (args.json) {
+    nlohmann::ordered_json j = {{"kind", args.kind}, {"waypoints", waypoints.cols()},
+                                {"pieces", curve.num_pieces()}, {"length", length},
+                                {"continuity", report.jump}, {"output", args.output}};
+    std::cout << j.dump(2) << "\n";
+    return kExitOk;
+  }
   std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints\n"
             << "pieces: " << curve.num_pieces() << "\n"
-            << std::setprecision(9) << "length: " << curve.ArcLength(1e-9) << " m\n"
+            << std::setprecision(9) << "length: " << length << " m\n"
             << "continuity (largest jump at the joints):\n";
   for (size_t d = 0; d < report.jump.size(); ++d) {
     std::cout << "  derivative " << d << ": " << std::setprecision(3) << std::scientific
@@ -50,6 +59,9 @@ void RegisterCurveCommand(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember({"cubic", "minjerk"}))
       ->capture_default_str();
   sub->add_option("-o,--output", args->output, "Output curve JSON file")->required();
+  sub->add_flag("--json", args->json,
+                "Print the summary as JSON (kind, waypoints, pieces, length in m, continuity: the largest jump of "
+                "derivatives 0-4 at the joints, output)");
   sub->callback([args, &run] { run = [args] { return RunCurve(*args); }; });
 }
 

@@ -54,10 +54,31 @@ std::string FormatBox(const Eigen::AlignedBox3d& box) {
 struct InfoArgs {
   std::string map;
   std::string unknown = ToString(UnknownSpace::kFree);
+  bool json = false;
 };
 
 int RunInfo(const InfoArgs& args) {
   const OccupancyMap map = OccupancyMap::Load(args.map, ParseUnknown(args.unknown));
+  if (args.json) {
+    nlohmann::ordered_json j = {{"map", args.map}, {"tree_type", map.source_type()},
+                                {"resolution", map.resolution()}, {"empty", map.empty()}};
+    if (!map.empty()) {
+      const VoxelBox box = map.KnownBox();
+      const double r = map.resolution();
+      const Eigen::AlignedBox3d bounds = map.Bounds();
+      j["bounds"] = {{"min", {bounds.min().x(), bounds.min().y(), bounds.min().z()}},
+                     {"max", {bounds.max().x(), bounds.max().y(), bounds.max().z()}}};
+      j["voxels"] = {box.size.x(), box.size.y(), box.size.z()};
+      j["nodes"] = map.NumNodes();
+      j["leaves"] = map.NumLeaves();
+      j["occupied_volume"] = map.OccupiedVolume();
+      j["free_volume"] = map.FreeVolume();
+      j["unknown_volume"] = box.num_voxels() * r * r * r - map.OccupiedVolume() - map.FreeVolume();
+      j["dense_esdf_mib"] = box.num_voxels() * 4.0 / (1 << 20);
+    }
+    std::cout << j.dump(2) << "\n";
+    return kExitOk;
+  }
   std::cout << "map: " << args.map << "\n"
             << "tree type: " << map.source_type() << "\n"
             << "resolution: " << map.resolution() << " m\n";
@@ -219,6 +240,9 @@ void RegisterMapCommand(CLI::App& app, Runner& run) {
   CLI::App* info_app = map_app->add_subcommand("info", "Bounds, resolution and volumes of a map");
   info_app->add_option("MAP", info->map, "OctoMap file (.bt or .ot)")->required();
   AddUnknownOption(info_app, &info->unknown);
+  info_app->add_flag("--json", info->json,
+                     "Print the figures as JSON (map, tree_type, resolution m, empty, bounds m, voxels, nodes, "
+                     "leaves, occupied_volume / free_volume / unknown_volume m^3, dense_esdf_mib)");
   info_app->callback([info, &run] { run = [info] { return RunInfo(*info); }; });
 
   RegisterGenerate(map_app, run);

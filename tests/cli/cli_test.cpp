@@ -353,6 +353,25 @@ TEST_F(CliTest, AbsurdSpatialWeightsAreRefused) {
   EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;  // a plan or a named failure, no crash
 }
 
+// `curve --json` and `map info --json` print their figures as JSON, the same as their prose: the
+// shipped forest is 20 x 20 x 4 m at 0.1 m (maps/README.md), and a two-point curve is its chord.
+TEST_F(CliTest, CurveAndMapInfoPrintJson) {
+  Write("two.csv", "x,y,z\n0,0,0\n3,4,0\n");
+  CliRun r = RunCli("curve " + Path("two.csv") + " -o " + Path("two.json") + " --json", "2>/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["pieces"].get<int>(), 1);
+  EXPECT_NEAR(j["length"].get<double>(), 5.0, 1e-9);
+  EXPECT_EQ(j["continuity"].size(), 5u);
+  r = RunCli("map info " + std::string(TIMEOPT_SOURCE_DIR) + "/maps/forest_20x20.bt --json", "2>/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["resolution"].get<double>(), 0.1);
+  EXPECT_EQ(j["voxels"], nlohmann::json::parse("[200, 200, 40]"));
+  EXPECT_NEAR(j["occupied_volume"].get<double>() + j["free_volume"].get<double>() + j["unknown_volume"].get<double>(),
+              20.0 * 20.0 * 4.0, 1e-6);
+}
+
 // The quadrotor's limits from the command line: waypoints with --max-speed, --max-thrust,
 // --min-thrust and --max-tilt (no per-axis limits then) holds them on the dense check (the result
 // JSON's ratios, certified rows: within 1e-6); bad values are invalid input naming the option or
