@@ -210,9 +210,6 @@ struct JerkRowTemplate {
   double jmax = 0.0;
   std::array<double, 3> a{};
   std::array<double, 3> basis{};
-  // Which Bernstein coefficient of the cell's jerk polynomial (on this axis, with this sign) the
-  // row bounds: index in [0, count).
-  int index = 0, count = 0;
 };
 // A row sum_j coef[j] b_{g0 + j} <= 1 over a regular cell's three half-grid values.
 struct GridRow {

@@ -416,8 +416,6 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
           internal::JerkRowTemplate t;
           t.g0 = g0;
           t.jmax = jmax;
-          t.index = i;
-          t.count = size;
           for (int j = 0; j < 3; ++j) {
             t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
             t.basis[static_cast<size_t>(j)] = bern_basis[j](i);

@@ -86,17 +86,6 @@ constexpr double kScpRate = 0.25;
 // speed at the curve's ends (tangent and curvature vanish there) and hit the iteration limit.
 constexpr double kLooseBound = 1000.0;
 
-// The structured programme's first solve only chooses the next linearization point and start (it
-// is never the answer), so it bounds only some of each cell's linearized jerk coefficients: the
-// even-indexed Bernstein coefficients and the last (the jerk at both ends of the cell), a
-// relaxation of the limit. Measured (instructions of the jerk-limited solve, callgrind):
-// m = 10, K = 50: 148 M -> 136 M (the first solve's rows 15,474 -> 12,486); the default plan:
-// 617 M -> 539 M (27,502 -> 21,022 rows, and no second round in the next solve). The ends alone
-// (12,486 / 17,782 rows) cost the plan a second round and 6 more iterations in its next solve.
-bool InFirstSolve(const internal::JerkRowTemplate& t) {
-  return t.index % 2 == 0 || t.index == t.count - 1;
-}
-
 // Upper bounds of d's free values: the velocity limit at each one's own point. The certified
 // velocity rows imply them (they bound f'^2 b on whole cells, and b at a cell's middle point is
 // the profile's own), so the answer does not change; a working set needs them, since without the
@@ -288,7 +277,6 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     const double floor = internal::LinearizationFloor(linearization);
     for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
       const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
-      if (first_loose && !InFirstSolve(t)) continue;
       p.next_id = static_cast<int>(static_rows + ti);
       const double lb[3] = {linearization[static_cast<size_t>(t.g0)], linearization[static_cast<size_t>(t.g0) + 1],
                             linearization[static_cast<size_t>(t.g0) + 2]};
@@ -321,7 +309,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     };
     std::vector<char> keep(p.rows.size());
     // The first solve starts from the jerk-free guess, which says nothing of where the jerk rows
-    // will bind: it takes every jerk row it has (InFirstSolve).
+    // will bind: it takes all of them.
     for (size_t r = 0; r < p.rows.size(); ++r) {
       keep[r] = p.essential[r] || (h == 0 && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r] ||
                 over_loose(p.rows[r]);
