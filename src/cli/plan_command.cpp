@@ -270,8 +270,8 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
   sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr as it ends (map, ESDF, search, spatial, check, temporal)");
   sub->add_flag("-q,--quiet", args->quiet, "Print no summary (the files are still written; the exit code says how it went)");
   sub->add_flag("--print-config", args->print_config,
-               "Print the complete planner configuration (the defaults, --config and the flags) as JSON "
-               "for --config, and plan nothing");
+               "Print the planner configuration that the defaults, --config and the flags give, as JSON for "
+               "--config, and plan nothing (the quadrotor limits and the start state are flags only, not in it)");
   sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");

@@ -27,8 +27,9 @@ void CurveQuality(PlanResult* result) {
     const TrajectoryState state = trajectory.Evaluate(t);
     const double speed = state.velocity.norm();
     slowest = std::min(slowest, speed);
+    // Rounding leaves |v x a| ~ 1e-16 |v||a| on a straight line: no bend below 1e-12 of it.
     const double bend = state.velocity.cross(state.acceleration).norm();
-    if (bend > 0.0) radius = std::min(radius, speed * speed * speed / bend);
+    if (bend > 1e-12 * speed * state.acceleration.norm()) radius = std::min(radius, speed * speed * speed / bend);
   }
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   result->min_interior_speed = std::isfinite(slowest) ? slowest : kNaN;
@@ -108,6 +109,9 @@ bool PlannerOptions::IsValid(std::string* error) const {
   }
   if (temporal_cells_per_piece < 1) {
     return fail("temporal_cells_per_piece", "an integer >= 1", temporal_cells_per_piece);
+  }
+  if (limits.max_jerk && temporal_cells_per_piece < kMinJerkLimitedCellsPerPiece) {
+    return fail("temporal_cells_per_piece", "an integer >= 3 with a jerk limit", temporal_cells_per_piece);
   }
   if (!std::isfinite(rho) || rho < 0.0) return fail("rho", "a finite number >= 0", rho);
   for (int a = 0; a < 3; ++a) {
@@ -339,16 +343,16 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
                         result.spatial.message);
     }
     result.curve = result.spatial.curve;
-    // A piece longer than twice the field's diagonal leaves the field: nothing to check it against
-    // (and its dense check would need a sample count without bound).
+    // A piece longer than twice the field's diagonal has run away (it cannot stay in the field),
+    // and its dense check would need a sample count without bound.
     const Eigen::AlignedBox3d field = esdf_->box().Metric(esdf_->resolution());
     const double reach = 2.0 * field.diagonal().norm() + 1.0;
     for (int i = 0; i < result.curve.num_pieces(); ++i) {
       const double length = PolylineLength(result.curve.piece(i));
       if (!(length <= reach)) {
         std::ostringstream s;
-        s << "the optimized curve leaves the distance field (piece " << i << " is " << length
-          << " m long, the field's diagonal " << field.diagonal().norm() << " m)";
+        s << "the optimized curve ran away: piece " << i << " is " << length
+          << " m long, more than twice the distance field's diagonal (" << field.diagonal().norm() << " m)";
         return finish(PlanStatus::kSpatialFailure, s.str());
       }
     }

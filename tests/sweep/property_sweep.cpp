@@ -642,6 +642,11 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (max_jerk_cells < timeopt::kMinJerkLimitedCellsPerPiece || max_jerk_cells > timeopt::kMaxCellsPerPiece) {
+    std::fprintf(stderr, "timeopt_property_sweep: --max-jerk-cells must be in [%d, %d], got %lld\n",
+                 timeopt::kMinJerkLimitedCellsPerPiece, timeopt::kMaxCellsPerPiece, max_jerk_cells);
+    return 2;
+  }
   timeopt::Settings settings;
   settings.ipopt_seconds = static_cast<double>(ipopt_seconds);
   settings.max_jerk_cells = static_cast<int>(max_jerk_cells);

@@ -181,8 +181,10 @@ struct SpatialCostBreakdown {
 struct SpatialResult {
   SpatialStatus status = SpatialStatus::kFailure;
   std::string message;
-  // Unit-s pieces. Spatial: C2 in s. Time-coupled: C2 in time with the durations below, so only G1
-  // in s (the temporal stage handles that through its joint ratios).
+  // Unit-s pieces. Spatial: C2 in s with uniform piece lengths; with chordal or centripetal ones
+  // (the default is chordal) the tangent's length changes at the joints, so G1 in s (G2 as a
+  // path). Time-coupled: C2 in time with the durations below, so G1 in s. The temporal stage
+  // handles G1 joints through its joint ratios.
   PiecewiseCurve curve;
   std::vector<double> durations;  // time-coupled: the fixed piece durations, seconds; else empty
   SpatialCostBreakdown initial_cost, final_cost;
