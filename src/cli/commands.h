@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "timeopt/conic/solver.h"
+#include "timeopt/io/sim_io.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
@@ -63,19 +64,14 @@ inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {
 // SummaryQuadrotor(limits), its ratios, the tolerance it allowed, and kFlightNote when a profile
 // without a jerk limit was not flown within its limits.
 inline nlohmann::ordered_json FlightSummary(const FeasibilityReport& flight, const VehicleLimits& limits) {
-  nlohmann::ordered_json j = {{"feasible", flight.feasible},
-                              {"max_velocity_ratio", flight.max_velocity_ratio},
-                              {"max_acceleration_ratio", flight.max_acceleration_ratio},
-                              {"max_position_error", flight.max_position_error}};
-  const auto ratio = [&](const char* key, const std::optional<double>& value) {
-    if (value) j[key] = *value;
-  };
-  ratio("max_speed_ratio", flight.max_speed_ratio);
-  ratio("max_acceleration_norm_ratio", flight.max_acceleration_norm_ratio);
-  ratio("max_thrust_ratio", flight.max_thrust_ratio);
-  ratio("min_thrust_ratio", flight.min_thrust_ratio);
-  ratio("max_tilt_ratio", flight.max_tilt_ratio);
-  j["tolerance"] = flight.tolerance;
+  // The report's own JSON (io), of which the summary keeps the verdict and the largest ratios.
+  const nlohmann::ordered_json report = nlohmann::ordered_json::parse(FeasibilityReportToJson(flight));
+  nlohmann::ordered_json j;
+  for (const char* key : {"feasible", "max_velocity_ratio", "max_acceleration_ratio", "max_position_error",
+                          "max_speed_ratio", "max_acceleration_norm_ratio", "max_thrust_ratio", "min_thrust_ratio",
+                          "max_tilt_ratio", "tolerance"}) {
+    if (report.contains(key)) j[key] = report[key];
+  }
   if (!flight.feasible && !limits.max_jerk) j["note"] = kFlightNote;
   return j;
 }
