@@ -165,6 +165,7 @@ class BandedIpm {
       run.end = r + 1;
       run.span = std::max<int>(run.span, row.count);
     }
+    for (int r = 0; r < m_; ++r) h_max_ = std::max(h_max_, std::abs(h_[static_cast<size_t>(r)]));
   }
 
   BandedIpmOutcome Run(const std::vector<double>& y0, const std::vector<double>* warm) {
@@ -177,8 +178,11 @@ class BandedIpm {
     }
     for (int it = 0;; ++it) {
       out.iterations = it;
-      Evaluate();
-      if (Converged()) {
+      EvaluateCells();
+      // The step keeps r_p and G'z up to date without a pass over the rows (Update); before
+      // answering they are formed again from x, s and z, so rounding in those updates never
+      // decides.
+      if (Converged() && (RowResiduals(), EvaluateCells(), Converged())) {
         out.kind = BandedIpmOutcome::Kind::kOptimal;
         out.x.resize(p_.x_form.size());
         for (size_t v = 0; v < out.x.size(); ++v) out.x[v] = p_.x_form[v].Value(x_);
@@ -227,10 +231,12 @@ class BandedIpm {
       s_[static_cast<size_t>(r)] = r < n_ ? x_[static_cast<size_t>(r)] : std::max(slack, kSlackFloor);
     }
     // z = mu0 / s with s'z = kStartGap J(x0).
-    Evaluate();
+    gz_.assign(static_cast<size_t>(n_ + W), 0.0);
+    EvaluateCells();
     if (!std::isfinite(objective_)) return false;
     const double mu0 = std::max(kStartGap * std::abs(objective_) / m_, std::numeric_limits<double>::min());
     for (int r = 0; r < m_; ++r) z_[static_cast<size_t>(r)] = mu0 / s_[static_cast<size_t>(r)];
+    RowResiduals();
     return true;
   }
 
@@ -261,7 +267,8 @@ class BandedIpm {
         ++count;
       }
     }
-    Evaluate();
+    gz_.assign(static_cast<size_t>(n_ + W), 0.0);
+    EvaluateCells();
     if (!std::isfinite(objective_)) return false;
     const double mu = count > 0 ? std::max(sum / count, kWarmMinGap * std::abs(objective_) / m_)
                                 : kStartGap * std::abs(objective_) / m_;
@@ -269,10 +276,10 @@ class BandedIpm {
       const size_t i = static_cast<size_t>(r);
       z_[i] = std::max(z_[i], mu / s_[i]);
     }
+    RowResiduals();
     return true;
   }
 
-  // J, its gradient and (into hess_) its Hessian at x_; the residuals r_d and r_p.
   // A row's value at v (W terms; v carries W zeros past n).
   static double Dot(const BandedRow& row, const std::vector<double>& v) {
     const double* x = v.data() + row.first;
@@ -281,7 +288,8 @@ class BandedIpm {
     return value;
   }
 
-  void Evaluate() {
+  // J, its gradient and Hessian at x_ (the cells), and r_d = grad J + G'z from the kept G'z.
+  void EvaluateCells() {
     grad_.assign(static_cast<size_t>(n_ + W), 0.0);
     hess_.Reset(n_, p_.bandwidth);
     objective_ = 0.0;
@@ -348,11 +356,15 @@ class BandedIpm {
         }
       }
     }
-    // One pass over the rows: r_p, G'z into r_d, and the figures Converged reads.
-    rd_ = grad_;
+    rd_.resize(static_cast<size_t>(n_ + W));
+    for (size_t v = 0; v < static_cast<size_t>(n_ + W); ++v) rd_[v] = grad_[v] + gz_[v];
+  }
+
+  // One pass over the rows: r_p, G'z and the figures Converged reads, from x, s and z.
+  void RowResiduals() {
+    gz_.assign(static_cast<size_t>(n_ + W), 0.0);
     rp_.resize(static_cast<size_t>(m_));
     rp_max_ = 0.0;
-    h_max_ = 1.0;
     gap_ = 0.0;
     for (const RowRun& run : runs_) {
       double acc[W] = {};
@@ -363,10 +375,9 @@ class BandedIpm {
         const double rp = Dot(row, x_) + s_[i] - h_[i];
         rp_[i] = rp;
         rp_max_ = std::max(rp_max_, std::abs(rp));
-        h_max_ = std::max(h_max_, std::abs(h_[i]));
         gap_ += s_[i] * z_[i];
       }
-      for (int t = 0; t < run.span; ++t) rd_[static_cast<size_t>(run.first + t)] += acc[t];
+      for (int t = 0; t < run.span; ++t) gz_[static_cast<size_t>(run.first + t)] += acc[t];
     }
   }
 
@@ -380,44 +391,26 @@ class BandedIpm {
            gap_ <= settings_.gap_tolerance * std::abs(objective_);
   }
 
-  // After dx_ holds the right-hand side: solves for dx, then ds = -r_p - G dx and
-  // dz = (z o (r_p + G dx) - rc) / s, with rc = s o z + shift (shift_ == nullptr: rc = s o z, the
-  // predictor) into ds_, dz_. Returns the largest step in (0, inf] that keeps s and z >= 0, as
-  // 1 / max(-ds / s, -dz / z) (multiplications, not a division per row), and, for the predictor,
-  // the sums that give mu at any step (MuAfter).
-  double Direction(const std::vector<double>* rc) {
-    factor_.Solve(dx_);
-    ds_.resize(static_cast<size_t>(m_));
-    dz_.resize(static_cast<size_t>(m_));
-    double inverse = 0.0, s1 = 0.0, s2 = 0.0;
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      const double gdx = Dot(rows_[r], dx_);
-      const double ds = -rp_[r] - gdx;
-      const double target = rc == nullptr ? s_[r] * z_[r] : (*rc)[r];
-      const double dz = (z_[r] * (rp_[r] + gdx) - target) * inv_s_[r];
-      ds_[r] = ds;
-      dz_[r] = dz;
-      inverse = std::max(inverse, std::max(-ds * inv_s_[r], -dz * inv_z_[r]));
-      s1 += s_[r] * dz + z_[r] * ds;
-      s2 += ds * dz;
-    }
-    sum_sdz_zds_ = s1;
-    sum_dsdz_ = s2;
-    return inverse > 0.0 ? 1.0 / inverse : kInf;
-  }
-
+  // One iteration in three passes over the rows (Mehrotra's predictor and corrector share the
+  // factorization; the corrector's right-hand side and the next r_p and G'z come from sums kept in
+  // the passes, so neither needs a pass of its own):
+  //   1. M = grad^2 J + G' (Z / S) G, the predictor's right-hand side -r_d + G' (z - z o r_p / s)
+  //      and G' (1 / s);
+  //   2. the predictor's ds, dz (rc = s o z), its step and mu after it, and G' (ds o dz / s);
+  //   3. the corrector's ds, dz with rc = s o z + ds_a o dz_a - sigma mu, whose right-hand side is
+  //      that of the predictor + G' (ds_a o dz_a / s) - sigma mu G' (1 / s), and G' dz.
+  // Then s += alpha ds, z += alpha dz, and (rows being linear) r_p *= 1 - alpha, G'z += alpha G' dz.
   bool Step() {
-    // One pass: M = grad^2 J + G' (Z / S) G, mu, 1 / s, 1 / z, and the predictor's right-hand side
-    // -r_d + G' ((rc - z o r_p) / s) with rc = s o z, that is G' (z - z o r_p / s).
     factor_ = hess_;
     dx_.assign(static_cast<size_t>(n_ + W), 0.0);
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
+    g_inv_s_.assign(static_cast<size_t>(n_ + W), 0.0);
     double mu = 0.0;
     inv_s_.resize(static_cast<size_t>(m_));
     inv_z_.resize(static_cast<size_t>(m_));
     for (const RowRun& run : runs_) {
       double block[W][W] = {};  // lower triangle
-      double acc[W] = {};
+      double acc[W] = {}, acc_inv[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
         const size_t i = static_cast<size_t>(r);
@@ -430,11 +423,13 @@ class BandedIpm {
         for (int a = 0; a < W; ++a) {
           const double wa = w * row.v[a];
           acc[a] += row.v[a] * t;
+          acc_inv[a] += row.v[a] * is;
           for (int b = 0; b <= a; ++b) block[a][b] += wa * row.v[b];
         }
       }
       for (int a = 0; a < run.span; ++a) {
         dx_[static_cast<size_t>(run.first + a)] += acc[a];
+        g_inv_s_[static_cast<size_t>(run.first + a)] += acc_inv[a];
         for (int b = 0; b <= a; ++b) {
           if (block[a][b] != 0.0) factor_.At(run.first + a, run.first + b) += block[a][b];
         }
@@ -442,36 +437,75 @@ class BandedIpm {
     }
     mu /= m_;
     if (!factor_.Factor()) return false;
-    // Predictor, and mu after its step from the sums Direction kept.
-    const double alpha_aff = std::min(1.0, Direction(nullptr));
-    const double mu_aff = (mu * m_ + alpha_aff * sum_sdz_zds_ + alpha_aff * alpha_aff * sum_dsdz_) / m_;
-    const double ratio = std::max(0.0, mu_aff / mu);
-    const double sigma = std::min(1.0, ratio * ratio * ratio);
-    // Corrector: rc = s o z + ds_a o dz_a - sigma mu, and its right-hand side in one pass.
-    rc_.resize(static_cast<size_t>(m_));
-    dx_.assign(static_cast<size_t>(n_ + W), 0.0);
-    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
+    rhs_ = dx_;
+    // Predictor.
+    factor_.Solve(dx_);
+    ds_.resize(static_cast<size_t>(m_));
+    dz_.resize(static_cast<size_t>(m_));
+    g_cross_.assign(static_cast<size_t>(n_ + W), 0.0);
+    double inverse = 0.0, s1 = 0.0, s2 = 0.0;
     for (const RowRun& run : runs_) {
       double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
         const BandedRow& row = rows_[static_cast<size_t>(r)];
         const size_t i = static_cast<size_t>(r);
-        const double rc = s_[i] * z_[i] + ds_[i] * dz_[i] - sigma * mu;
-        rc_[i] = rc;
-        const double t = (rc - z_[i] * rp_[i]) * inv_s_[i];
-        for (int k = 0; k < W; ++k) acc[k] += row.v[k] * t;
+        const double gdx = Dot(row, dx_);
+        const double ds = -rp_[i] - gdx;
+        const double dz = z_[i] * (rp_[i] + gdx) * inv_s_[i] - z_[i];
+        ds_[i] = ds;
+        dz_[i] = dz;
+        inverse = std::max(inverse, std::max(-ds * inv_s_[i], -dz * inv_z_[i]));
+        s1 += s_[i] * dz + z_[i] * ds;
+        s2 += ds * dz;
+        const double cross = ds * dz * inv_s_[i];
+        for (int t = 0; t < W; ++t) acc[t] += row.v[t] * cross;
       }
-      for (int k = 0; k < run.span; ++k) dx_[static_cast<size_t>(run.first + k)] += acc[k];
+      for (int t = 0; t < run.span; ++t) g_cross_[static_cast<size_t>(run.first + t)] += acc[t];
     }
-    const double alpha = std::min(1.0, kStepFraction * Direction(&rc_));
+    const double alpha_aff = std::min(1.0, inverse > 0.0 ? 1.0 / inverse : kInf);
+    const double mu_aff = (mu * m_ + alpha_aff * s1 + alpha_aff * alpha_aff * s2) / m_;
+    const double ratio = std::max(0.0, mu_aff / mu);
+    const double sigma = std::min(1.0, ratio * ratio * ratio);
+    const double shift = sigma * mu;
+    // Corrector.
+    for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = rhs_[v] + g_cross_[v] - shift * g_inv_s_[v];
+    for (size_t v = static_cast<size_t>(n_); v < dx_.size(); ++v) dx_[v] = 0.0;
+    factor_.Solve(dx_);
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) {
       if (!std::isfinite(dx_[v])) return false;
     }
+    g_dz_.assign(static_cast<size_t>(n_ + W), 0.0);
+    inverse = 0.0;
+    for (const RowRun& run : runs_) {
+      double acc[W] = {};
+      for (int r = run.begin; r < run.end; ++r) {
+        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        const size_t i = static_cast<size_t>(r);
+        const double gdx = Dot(row, dx_);
+        const double rc = s_[i] * z_[i] + ds_[i] * dz_[i] - shift;
+        const double ds = -rp_[i] - gdx;
+        const double dz = (z_[i] * (rp_[i] + gdx) - rc) * inv_s_[i];
+        ds_[i] = ds;
+        dz_[i] = dz;
+        inverse = std::max(inverse, std::max(-ds * inv_s_[i], -dz * inv_z_[i]));
+        for (int t = 0; t < W; ++t) acc[t] += row.v[t] * dz;
+      }
+      for (int t = 0; t < run.span; ++t) g_dz_[static_cast<size_t>(run.first + t)] += acc[t];
+    }
+    const double alpha = std::min(1.0, kStepFraction * (inverse > 0.0 ? 1.0 / inverse : kInf));
     if (!(alpha > 0.0)) return false;
+    // The step, and r_p, G'z and the figures Converged reads after it.
+    const double keep = 1.0 - alpha;
+    rp_max_ = 0.0;
+    gap_ = 0.0;
     for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
       s_[r] += alpha * ds_[r];
       z_[r] += alpha * dz_[r];
+      rp_[r] *= keep;
+      rp_max_ = std::max(rp_max_, std::abs(rp_[r]));
+      gap_ += s_[r] * z_[r];
     }
+    for (size_t v = 0; v < gz_.size(); ++v) gz_[v] += alpha * g_dz_[v];
     // The bound rows keep x = s exactly (their residual is 0 and stays 0 up to rounding).
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) x_[v] = s_[v];
     return true;
@@ -490,10 +524,12 @@ class BandedIpm {
   const std::vector<BandedRow>& rows_;
   const std::vector<double>& h_;
   std::vector<double> x_, s_, z_;
-  std::vector<double> grad_, rd_, rp_, rc_, dx_, ds_, dz_, inv_s_, inv_z_;
+  std::vector<double> grad_, rd_, rp_, dx_, ds_, dz_, inv_s_, inv_z_;
+  // G'z (kept through the steps), and the sums over the rows of one iteration: G' (1 / s),
+  // G' (ds_a o dz_a / s), G' dz, and the predictor's right-hand side.
+  std::vector<double> gz_, g_inv_s_, g_cross_, g_dz_, rhs_;
   double objective_ = 0.0;
-  double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from Evaluate
-  double sum_sdz_zds_ = 0.0, sum_dsdz_ = 0.0;     // from Direction
+  double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
   Band hess_, factor_;
 };
 
