@@ -577,11 +577,13 @@ bool BandedProblem::AppendRow(BandedRow row, double bound) {
     for (int t = 0; t < row.count; ++t) scale = std::max(scale, std::abs(row.v[t]));
   }
   if (!(scale > 0.0)) scale = 1.0;
-  for (int t = 0; t < row.count; ++t) row.v[t] /= scale;
+  const double inverse = 1.0 / scale;
+  for (int t = 0; t < kMaxRowSpan; ++t) row.v[t] *= inverse;
   row.kind = static_cast<short>(kind);
+  const double scaled = bound * inverse;
   rows.push_back(row);
-  h.push_back(bound / scale);
-  essential.push_back(!(h.back() > 0.0) ? 1 : 0);
+  h.push_back(scaled);
+  essential.push_back(!(scaled > 0.0) ? 1 : 0);
   id.push_back(next_id >= 0 ? next_id : static_cast<int>(rows.size()) - 1);
   return true;
 }

@@ -275,13 +275,21 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     p.id.resize(static_rows);
     p.bandwidth = base.bandwidth;
     const double floor = internal::LinearizationFloor(linearization);
+    // A cell's jerk rows are consecutive templates: its linearization point once per cell.
+    int cell_g0 = -1;
+    double root = 0.0, cb = 0.0;
     for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
       const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
       p.next_id = static_cast<int>(static_rows + ti);
-      const double lb[3] = {linearization[static_cast<size_t>(t.g0)], linearization[static_cast<size_t>(t.g0) + 1],
-                            linearization[static_cast<size_t>(t.g0) + 2]};
-      const double bbar = internal::LinearizationPoint(lb, floor);
-      const double ca = 2.0 * std::sqrt(bbar) / (3.0 * t.jmax), cb = 1.0 / (3.0 * bbar);
+      if (t.g0 != cell_g0) {
+        cell_g0 = t.g0;
+        const double lb[3] = {linearization[static_cast<size_t>(t.g0)], linearization[static_cast<size_t>(t.g0) + 1],
+                              linearization[static_cast<size_t>(t.g0) + 2]};
+        const double bbar = internal::LinearizationPoint(lb, floor);
+        root = 2.0 * std::sqrt(bbar) / 3.0;
+        cb = 1.0 / (3.0 * bbar);
+      }
+      const double ca = root / t.jmax;
       const double coef[3] = {t.a[0] * ca + t.basis[0] * cb, t.a[1] * ca + t.basis[1] * cb, t.a[2] * ca + t.basis[2] * cb};
       if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) continue;  // holds for b >= 0
       if (!add_cell_row(p, t.g0, coef)) {
