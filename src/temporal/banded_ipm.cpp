@@ -238,23 +238,17 @@ class BandedIpm {
     for (int r = 0; r < m_; ++r) order_[static_cast<size_t>(r)] = r;
     std::stable_sort(order_.begin() + std::min(n_, m_), order_.end(),
                      [&](int a, int b) { return p.rows[static_cast<size_t>(a)].first < p.rows[static_cast<size_t>(b)].first; });
-    rows_.resize(static_cast<size_t>(m_));
-    h_.resize(static_cast<size_t>(m_));
-    for (int r = 0; r < m_; ++r) {
-      rows_[static_cast<size_t>(r)] = p.rows[static_cast<size_t>(order_[static_cast<size_t>(r)])];
-      h_[static_cast<size_t>(r)] = p.h[static_cast<size_t>(order_[static_cast<size_t>(r)])];
-    }
     // Runs of consecutive rows that start at the same unknown: their sums into the gradient, the
     // right-hand side and the Newton matrix are formed in registers and added once per run (adding
     // each row's terms in memory stalled on store-to-load forwarding).
     for (int r = 0; r < m_; ++r) {
-      const BandedRow& row = rows_[static_cast<size_t>(r)];
+      const BandedRow& row = Row(static_cast<size_t>(r));
       if (runs_.empty() || runs_.back().first != row.first) runs_.push_back(RowRun{r, r, row.first, 0});
       RowRun& run = runs_.back();
       run.end = r + 1;
       run.span = std::max<int>(run.span, row.count);
     }
-    for (int r = 0; r < m_; ++r) h_max_ = std::max(h_max_, std::abs(h_[static_cast<size_t>(r)]));
+    for (int r = 0; r < m_; ++r) h_max_ = std::max(h_max_, std::abs(Bound(static_cast<size_t>(r))));
     // Each cell's two forms on one window of unknowns (over control values), for EvaluateCells.
     if (p.controls) {
       windows_.resize(p.cells.size());
@@ -279,7 +273,7 @@ class BandedIpm {
     // The rows' coefficients as columns, for Step's passes two rows at a time.
     for (int t = 0; t < W; ++t) {
       v_[t].resize(static_cast<size_t>(m_));
-      for (int r = 0; r < m_; ++r) v_[t][static_cast<size_t>(r)] = rows_[static_cast<size_t>(r)].v[t];
+      for (int r = 0; r < m_; ++r) v_[t][static_cast<size_t>(r)] = Row(static_cast<size_t>(r)).v[t];
     }
   }
 
@@ -328,9 +322,9 @@ class BandedIpm {
     x_.resize(static_cast<size_t>(n_ + W), 0.0);
     double t_max = 1.0;
     for (int r = n_; r < m_; ++r) {
-      if (!(h_[static_cast<size_t>(r)] > 0.0)) continue;
-      const double value = Dot(rows_[static_cast<size_t>(r)], x_);
-      if (value > h_[static_cast<size_t>(r)]) t_max = std::min(t_max, h_[static_cast<size_t>(r)] / value);
+      if (!(Bound(static_cast<size_t>(r)) > 0.0)) continue;
+      const double value = Dot(Row(static_cast<size_t>(r)), x_);
+      if (value > Bound(static_cast<size_t>(r))) t_max = std::min(t_max, Bound(static_cast<size_t>(r)) / value);
     }
     const bool guess = y0.size() == static_cast<size_t>(n_);
     const double weight = guess ? kGreedyWeight : 0.0;
@@ -343,7 +337,7 @@ class BandedIpm {
     z_.assign(static_cast<size_t>(m_), 0.0);
     constexpr double kSlackFloor = 1e-2;
     for (int r = 0; r < m_; ++r) {
-      const double slack = h_[static_cast<size_t>(r)] - Dot(rows_[static_cast<size_t>(r)], x_);
+      const double slack = Bound(static_cast<size_t>(r)) - Dot(Row(static_cast<size_t>(r)), x_);
       s_[static_cast<size_t>(r)] = r < n_ ? x_[static_cast<size_t>(r)] : std::max(slack, kSlackFloor);
     }
     // z = mu0 / s with s'z = kStartGap J(x0).
@@ -373,7 +367,7 @@ class BandedIpm {
     int count = 0;
     for (int r = 0; r < m_; ++r) {
       const size_t i = static_cast<size_t>(r);
-      const double slack = h_[i] - Dot(rows_[i], x_);
+      const double slack = Bound(i) - Dot(Row(i), x_);
       s_[i] = r < n_ ? x_[i] : std::max(slack, warm.empty() ? kGuessSlack : kWarmSlack);
       const int id = p_.id[static_cast<size_t>(order_[i])];
       const double z = id >= 0 && static_cast<size_t>(id) < warm.size() ? warm[static_cast<size_t>(id)] : std::nan("");
@@ -475,10 +469,10 @@ class BandedIpm {
     for (const RowRun& run : runs_) {
       double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
-        const BandedRow& row = rows_[static_cast<size_t>(r)];
+        const BandedRow& row = Row(static_cast<size_t>(r));
         const size_t i = static_cast<size_t>(r);
         for (int t = 0; t < W; ++t) acc[t] += row.v[t] * z_[i];
-        const double rp = Dot(row, x_) + s_[i] - h_[i];
+        const double rp = Dot(row, x_) + s_[i] - Bound(i);
         rp_[i] = rp;
         rp_max_ = std::max(rp_max_, std::abs(rp));
         gap_ += s_[i] * z_[i];
@@ -672,8 +666,9 @@ class BandedIpm {
   std::vector<RowRun> runs_;
   int n_ = 0, m_ = 0;
   std::vector<int> order_;       // row r here is row order_[r] of p_
-  std::vector<BandedRow> rows_;  // p_'s rows and bounds in that order
-  std::vector<double> h_;
+  // Row r here, and its bound: p_'s row order_[r].
+  const BandedRow& Row(size_t r) const { return p_.rows[static_cast<size_t>(order_[r])]; }
+  double Bound(size_t r) const { return p_.h[static_cast<size_t>(order_[r])]; }
   std::vector<double> x_, s_, z_;
   std::vector<double> grad_, rd_, rp_, dx_, ds_, dz_, inv_s_, inv_z_;
   // G'z (kept through the steps), and the sums over the rows of one iteration: G' (1 / s),

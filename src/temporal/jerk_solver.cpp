@@ -268,12 +268,14 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   const auto add_cell_row = [&](internal::BandedProblem& q, int g0, const double* coef) {
     const size_t g = static_cast<size_t>(g0);
     if (!mapped[g]) {
-      if (!base.MapCell(g0, &cell_map[g])) return false;
+      if (!q.MapCell(g0, &cell_map[g])) return false;
       mapped[g] = 1;
     }
     return q.AddCellRow(cell_map[g], coef, 1.0);
   };
-  const size_t rows = base.rows.size() + templates.cell_rows.size();
+  // Room for every row at once (the jerk rows of each linearization follow the static ones): one
+  // allocation, not a copy of ~1 MB per growth.
+  const size_t rows = base.rows.size() + templates.cell_rows.size() + templates.jerk_rows.size();
   base.rows.reserve(rows);
   base.h.reserve(rows);
   base.essential.reserve(rows);
@@ -310,12 +312,20 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   for (int v = 0; v < base.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
-  internal::BandedProblem p = base;
-  internal::BandedProblem w = base;  // a solve's working set of p
-  p.rows.reserve(static_rows + templates.jerk_rows.size());
-  p.h.reserve(p.rows.capacity());
-  p.essential.reserve(p.rows.capacity());
-  p.id.reserve(p.rows.capacity());
+  const int base_bandwidth = base.bandwidth;
+  // A solve's working set of p: p's unknowns, cells and forms, and rows chosen below.
+  internal::BandedProblem w;
+  w.n = base.n;
+  w.controls = base.controls;
+  w.cells = base.cells;
+  w.grid_form = base.grid_form;
+  w.x_form = base.x_form;
+  w.cap = base.cap;
+  w.rows.reserve(rows);
+  w.h.reserve(rows);
+  w.essential.reserve(rows);
+  w.id.reserve(rows);
+  internal::BandedProblem p = std::move(base);
   std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
@@ -327,7 +337,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     p.h.resize(static_rows);
     p.essential.resize(static_rows);
     p.id.resize(static_rows);
-    p.bandwidth = base.bandwidth;
+    p.bandwidth = base_bandwidth;
     const double floor = internal::LinearizationFloor(linearization);
     // A cell's jerk rows are consecutive templates: its linearization point once per cell.
     int cell_g0 = -1;
