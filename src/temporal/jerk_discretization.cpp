@@ -117,6 +117,9 @@ struct JerkContext {
   // Where the regular cells' velocity, acceleration and jerk rows go (DiscretizeJerkLimitedTemplates),
   // or null.
   internal::JerkTemplates* templates = nullptr;
+  // The Lagrange basis in Bernstein form of basis_size coefficients (for the jerk templates).
+  int basis_size = -1;
+  SmallPoly basis_bernstein[3];
   // sddot at the start and the end where the boundary acceleration fixes it (AddBoundaryAcceleration).
   std::optional<double> boundary_sddot[2];
   // b at the start and the end where the boundary acceleration fixes b itself (a vanishing tangent).
@@ -406,11 +409,14 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
     if (mode == JerkRows::kNone && c.templates != nullptr) {
       int size = 0;
       for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), Basis(j).size())));
-      SmallPoly bern_jerk[3], bern_basis[3];
-      for (int j = 0; j < 3; ++j) {
-        bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
-        bern_basis[j] = c.bernstein.Convert(Padded(Basis(j), size));
+      SmallPoly bern_jerk[3];
+      for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
+      // The basis in Bernstein form depends on the size alone: converted once per size.
+      if (c.basis_size != size) {
+        for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
+        c.basis_size = size;
       }
+      const SmallPoly (&bern_basis)[3] = c.basis_bernstein;
       for (const double sign : {1.0, -1.0}) {
         for (int i = 0; i < size; ++i) {
           internal::JerkRowTemplate t;
@@ -708,8 +714,7 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   internal::AssignGridValues(half, &d);
   internal::MakeCells(half, &d);
 
-  JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, 0.0, {}};
-  c.templates = templates;
+  JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, 0.0, {}, templates, -1, {}, {}, {}};
   if (linearization != nullptr) c.bbar_floor = internal::LinearizationFloor(*linearization);
   for (int i = 0; i < m; ++i) {
     std::array<PolynomialPiece::Coefficients, 3> derivative;
