@@ -385,8 +385,9 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       return false;
     };
     std::vector<char> keep(p.rows.size());
-    // The first solve starts from the jerk-free guess, which says nothing of where the jerk rows
-    // will bind: it takes all of them.
+    // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
+    // takes all of them; one from the coarse programme's jerk-limited answer only those near
+    // their bound there.
     for (size_t r = 0; r < p.rows.size(); ++r) {
       keep[r] = p.essential[r] || (h == 0 && !jerk_aware && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r] ||
                 over_loose(p.rows[r]);
@@ -792,16 +793,28 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     };
     if (d.controls && !d.infeasible_reason && d.num_vars > 0) {
       std::vector<double> first = coarse_start();
-      const bool jerk_aware = !first.empty();
-      if (!jerk_aware) {
-        // The guess on a coarser grid: it only chooses the first linearization, start and
-        // working set.
+      bool jerk_aware = !first.empty();
+      // The guess on a coarser grid: it only chooses the first linearization, start and working
+      // set.
+      const auto jerk_free_start = [&]() {
         const std::vector<double> guess = certified_guess(d, std::max(2, (problem.cells_per_piece + 1) / kGuessCoarsening));
-        if (!guess.empty()) first = GridValues(d, guess);
-      }
+        return guess.empty() ? std::vector<double>() : GridValues(d, guess);
+      };
+      if (!jerk_aware) first = jerk_free_start();
       if (!first.empty()) {
         StructuredScp scp;
-        const bool answered = SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &scp);
+        bool answered = SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &scp);
+        if (!answered && jerk_aware) {
+          // From the coarse answer it did not answer: once more from the jerk-free guess, as
+          // without the coarse start, before the general path.
+          build_time += scp.build_seconds;
+          solve_time += scp.solve_seconds;
+          iterations += scp.iterations;
+          scp = StructuredScp();
+          jerk_aware = false;
+          first = jerk_free_start();
+          answered = !first.empty() && SolveStructuredScp(problem, d, templates, std::move(first), settings, false, &scp);
+        }
         build_time += scp.build_seconds;
         solve_time += scp.solve_seconds;
         iterations += scp.iterations;
