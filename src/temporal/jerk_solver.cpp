@@ -231,8 +231,9 @@ std::vector<double> GridValues(const TemporalDiscretization& d, const std::vecto
   return b;
 }
 
-// The profile's exact time for b at every half-grid value of the jerk-limited d.
-double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) {
+// The profile of b at every half-grid value of the jerk-limited d (std::invalid_argument for
+// values that make none).
+TemporalProfile ProfileOf(const TemporalDiscretization& d, const std::vector<double>& b) {
   const int half = d.cells_per_piece, full = half / 2;
   std::vector<std::vector<double>> piece_b(static_cast<size_t>(d.num_pieces));
   std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(d.num_pieces));
@@ -240,8 +241,11 @@ double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b
     piece_b[static_cast<size_t>(i)].assign(b.begin() + d.GridIndex(i, 0), b.begin() + d.GridIndex(i, half) + 1);
     shapes[static_cast<size_t>(i)].assign(d.shapes.begin() + i * full, d.shapes.begin() + (i + 1) * full);
   }
-  return TemporalProfile::JerkLimited(std::move(piece_b), std::move(shapes), d.cell_edges).total_time();
+  return TemporalProfile::JerkLimited(std::move(piece_b), std::move(shapes), d.cell_edges);
 }
+
+// The profile's exact time for b at every half-grid value of the jerk-limited d.
+double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) { return ProfileOf(d, b).total_time(); }
 
 // The sequential convex programme on the structured path (banded_ipm.h), over d's control values:
 // d (from DiscretizeJerkLimitedTemplates) and the velocity and acceleration templates become a
@@ -759,17 +763,9 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       iterations += scp.iterations;
       if (!answered) return b;
       // b of the coarse profile at every half-grid value of d.
-      const std::vector<double> cb = GridValues(dc, scp.x);
-      const int half = dc.cells_per_piece, full = half / 2;
-      std::vector<std::vector<double>> piece_b(static_cast<size_t>(dc.num_pieces));
-      std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(dc.num_pieces));
-      for (int i = 0; i < dc.num_pieces; ++i) {
-        piece_b[static_cast<size_t>(i)].assign(cb.begin() + dc.GridIndex(i, 0), cb.begin() + dc.GridIndex(i, half) + 1);
-        shapes[static_cast<size_t>(i)].assign(dc.shapes.begin() + i * full, dc.shapes.begin() + (i + 1) * full);
-      }
       std::optional<TemporalProfile> profile;
       try {
-        profile = TemporalProfile::JerkLimited(std::move(piece_b), std::move(shapes), dc.cell_edges);
+        profile = ProfileOf(dc, GridValues(dc, scp.x));
       } catch (const std::exception&) {
         return b;
       }
