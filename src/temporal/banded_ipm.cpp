@@ -118,7 +118,6 @@ template <class T>
 struct Lanes;
 template <>
 struct Lanes<double> {
-  static constexpr int kCount = 1;
   static double Load(const double* p) { return *p; }
   static void Store(double* p, double a) { *p = a; }
   static double Max(double a, double b) { return std::max(a, b); }
@@ -127,7 +126,6 @@ struct Lanes<double> {
 };
 template <>
 struct Lanes<Pair> {
-  static constexpr int kCount = 2;
   static Pair Load(const double* p) { return LoadPair(p); }
   static void Store(double* p, Pair a) { StorePair(p, a); }
   static Pair Max(Pair a, Pair b) { return MaxPair(a, b); }
@@ -288,7 +286,7 @@ class BandedIpm {
     for (int it = 0;; ++it) {
       out.iterations = it;
       EvaluateCells();
-      // The step keeps r_p and G'z up to date without a pass over the rows (Update); before
+      // Step keeps r_p and G'z up to date without a pass over the rows of their own; before
       // answering they are formed again from x, s and z, so rounding in those updates never
       // decides.
       if (Converged() && (RowResiduals(), EvaluateCells(), Converged())) {
