@@ -720,6 +720,28 @@ bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, dou
   return true;
 }
 
+void BandedProblem::Reserve(size_t count) {
+  rows.reserve(count);
+  h.reserve(count);
+  essential.reserve(count);
+  id.reserve(count);
+}
+
+BandedProblem BandedProblem::WithoutRows(size_t count) const {
+  BandedProblem out;
+  out.n = n;
+  out.bandwidth = bandwidth;
+  out.controls = controls;
+  out.cells = cells;
+  out.grid_form = grid_form;
+  out.x_form = x_form;
+  out.cap = cap;
+  out.next_id = next_id;
+  out.kind = kind;
+  out.Reserve(count);
+  return out;
+}
+
 bool BandedProblem::AppendRow(BandedRow row, double bound) {
   if (row.count == 0) return bound >= -1e-9;
   double scale = std::abs(bound);

@@ -102,6 +102,10 @@ struct BandedProblem {
   std::vector<int> id;
   int next_id = -1;
   int kind = -1;  // the kind AddRow gives its rows
+  // Room for `count` rows in rows, h, essential and id.
+  void Reserve(size_t count);
+  // The same unknowns, cells and forms without rows (room for `count`): a working set to fill.
+  BandedProblem WithoutRows(size_t count) const;
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);

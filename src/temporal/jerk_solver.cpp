@@ -26,6 +26,7 @@
 // above run.
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -188,6 +189,34 @@ int GrowWorkingSet(const std::vector<LinearRow>& rows, const std::vector<double>
   return added;
 }
 
+// The coefficients of the linearized jerk rows over their cell's three half-grid values at a
+// linearization (b at every half-grid value): |P| + j b / (2 bbar^1.5) <= 3 j / (2 sqrt(bbar))
+// divided by its bound, bbar the cell's LinearizationPoint. A cell's templates are consecutive, so
+// bbar is found once per cell.
+class JerkCoefficients {
+ public:
+  explicit JerkCoefficients(const std::vector<double>& linearization)
+      : linearization_(linearization), floor_(internal::LinearizationFloor(linearization)) {}
+  std::array<double, 3> operator()(const internal::JerkRowTemplate& t) {
+    if (t.g0 != g0_) {
+      g0_ = t.g0;
+      const size_t g = static_cast<size_t>(t.g0);
+      const double lb[3] = {linearization_[g], linearization_[g + 1], linearization_[g + 2]};
+      const double bbar = internal::LinearizationPoint(lb, floor_);
+      root_ = 2.0 * std::sqrt(bbar) / 3.0;
+      cb_ = 1.0 / (3.0 * bbar);
+    }
+    const double ca = root_ / t.jmax;
+    return {t.a[0] * ca + t.basis[0] * cb_, t.a[1] * ca + t.basis[1] * cb_, t.a[2] * ca + t.basis[2] * cb_};
+  }
+
+ private:
+  const std::vector<double>& linearization_;
+  double floor_;
+  int g0_ = -1;
+  double root_ = 0.0, cb_ = 0.0;
+};
+
 // The gain in J, to first order, of linearizing the jerk rows again at `answer` (b at every grid
 // value) instead of at `linearization`: a jerk row with multiplier z that the new linearization
 // loosens by delta at the answer (in the scaled row's units, bound +-1) lowers the optimum by
@@ -196,19 +225,14 @@ int GrowWorkingSet(const std::vector<LinearRow>& rows, const std::vector<double>
 double PredictedGain(const TemporalDiscretization& d, const internal::JerkTemplates& templates, size_t static_rows,
                      const std::vector<double>& z_by_id, const std::vector<double>& linearization,
                      const std::vector<double>& answer) {
-  const double floor_old = internal::LinearizationFloor(linearization);
-  const double floor_new = internal::LinearizationFloor(answer);
+  JerkCoefficients old_rows(linearization), new_rows(answer);
   // A row's value minus its bound at the answer, scaled as BandedProblem scales it.
-  const auto excess = [&](const internal::JerkRowTemplate& t, const std::vector<double>& at, double floor) {
-    const double lb[3] = {at[static_cast<size_t>(t.g0)], at[static_cast<size_t>(t.g0) + 1], at[static_cast<size_t>(t.g0) + 2]};
-    const double bbar = internal::LinearizationPoint(lb, floor);
-    const double ca = 2.0 * std::sqrt(bbar) / (3.0 * t.jmax), cb = 1.0 / (3.0 * bbar);
+  const auto excess = [&](const internal::JerkRowTemplate& t, const std::array<double, 3>& coef) {
     double value = -1.0, fixed = 1.0;
     for (size_t j = 0; j < 3; ++j) {
-      const double coef = t.a[j] * ca + t.basis[j] * cb;
       const double b = answer[static_cast<size_t>(t.g0) + j];
-      value += coef * b;
-      if (d.grid[static_cast<size_t>(t.g0) + j].var < 0) fixed -= coef * b;
+      value += coef[j] * b;
+      if (d.grid[static_cast<size_t>(t.g0) + j].var < 0) fixed -= coef[j] * b;
     }
     const double scale = std::abs(fixed) > 0.0 ? std::abs(fixed) : 1.0;
     return value / scale;
@@ -219,7 +243,7 @@ double PredictedGain(const TemporalDiscretization& d, const internal::JerkTempla
     const double z = id < z_by_id.size() ? z_by_id[id] : 0.0;
     if (!(z > 0.0)) continue;
     const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
-    gain += z * (excess(t, linearization, floor_old) - excess(t, answer, floor_new));
+    gain += z * (excess(t, old_rows(t)) - excess(t, new_rows(t)));
   }
   return gain;
 }
@@ -285,10 +309,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // Room for every row at once (the jerk rows of each linearization follow the static ones): one
   // allocation, not a copy of ~1 MB per growth.
   const size_t rows = base.rows.size() + templates.cell_rows.size() + templates.jerk_rows.size();
-  base.rows.reserve(rows);
-  base.h.reserve(rows);
-  base.essential.reserve(rows);
-  base.id.reserve(rows);
+  base.Reserve(rows);
   for (const internal::GridRow& row : templates.cell_rows) {
     base.kind = static_cast<int>(row.kind);
     if (!add_cell_row(base, row.g0, row.coef.data())) {
@@ -323,17 +344,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   out->build_seconds += SecondsSince(start);
   const int base_bandwidth = base.bandwidth;
   // A solve's working set of p: p's unknowns, cells and forms, and rows chosen below.
-  internal::BandedProblem w;
-  w.n = base.n;
-  w.controls = base.controls;
-  w.cells = base.cells;
-  w.grid_form = base.grid_form;
-  w.x_form = base.x_form;
-  w.cap = base.cap;
-  w.rows.reserve(rows);
-  w.h.reserve(rows);
-  w.essential.reserve(rows);
-  w.id.reserve(rows);
+  internal::BandedProblem w = base.WithoutRows(rows);
   internal::BandedProblem p = std::move(base);
   std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
@@ -347,25 +358,13 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     p.essential.resize(static_rows);
     p.id.resize(static_rows);
     p.bandwidth = base_bandwidth;
-    const double floor = internal::LinearizationFloor(linearization);
-    // A cell's jerk rows are consecutive templates: its linearization point once per cell.
-    int cell_g0 = -1;
-    double root = 0.0, cb = 0.0;
+    JerkCoefficients jerk_coefficients(linearization);
     for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
       const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
       p.next_id = static_cast<int>(static_rows + ti);
-      if (t.g0 != cell_g0) {
-        cell_g0 = t.g0;
-        const double lb[3] = {linearization[static_cast<size_t>(t.g0)], linearization[static_cast<size_t>(t.g0) + 1],
-                              linearization[static_cast<size_t>(t.g0) + 2]};
-        const double bbar = internal::LinearizationPoint(lb, floor);
-        root = 2.0 * std::sqrt(bbar) / 3.0;
-        cb = 1.0 / (3.0 * bbar);
-      }
-      const double ca = root / t.jmax;
-      const double coef[3] = {t.a[0] * ca + t.basis[0] * cb, t.a[1] * ca + t.basis[1] * cb, t.a[2] * ca + t.basis[2] * cb};
+      const std::array<double, 3> coef = jerk_coefficients(t);
       if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) continue;  // holds for b >= 0
-      if (!add_cell_row(p, t.g0, coef)) {
+      if (!add_cell_row(p, t.g0, coef.data())) {
         out->why = "a jerk row over more than four control values, or a constant one violated";
         return false;
       }
