@@ -71,6 +71,11 @@ const double kRestTimeWeight =
 constexpr double kNormalTolerance = 1e-6;
 // The jerk rows' smallest linearization point relative to the largest b (see bbar_floor).
 constexpr double kLinearizationFloor = 1e-4;
+// The share of the jerk limit a rest cell keeps at its rest point (RestJerkShare), at least.
+// Against the time-domain reference on 12 rest-to-rest cubics and quintics at K = 50
+// (tests/temporal/time_domain_reference.h), 0.8 / 0.9 / 0.95 / 0.97 left 5 / 6 / 8 / 7 of them
+// within 0.5% of its T (5 without halving; 1 with the earlier bounds of AddRestCellRows).
+constexpr double kRestJerkShare = 0.95;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
 constexpr double kLargestRestCell = 0.25;
@@ -185,12 +190,59 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
   c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
     return "rest cell shape in piece " + std::to_string(piece) + " cell " + std::to_string(k);
   });
-  double speed_per_b = 0.0;                           // sum over axes of M1^2
-  Eigen::Vector3d acc_per_b = Eigen::Vector3d::Zero();  // C per axis
+  // With sigma in [0, 1] the fraction of the cell's time from rest (at the far end: 1), the cell
+  // is s = s_rest +- len sigma^3 and b = b1 sigma^4, so per axis (f^(n) at s(sigma); upper signs
+  // for a start, lower for an end, whose acceleration brakes while its s-jerk is still positive):
+  //   v = sqrt(b1) f' sigma^2,  acc = b1 (+-f' 2 sigma / (3 len) + f'' sigma^4),
+  //   jerk = b1^1.5 (f' 2 / (9 len^2) +- f'' 2 sigma^3 / len + f''' sigma^6),
+  // polynomials in sigma times a power of b1 alone: the largest Bernstein coefficient of each
+  // bounds it on the whole cell, with the signs of the terms kept (adding the largest |f'|, |f''|
+  // and |f'''| on the cell instead held a curved start to half its jerk limit). Pieces whose
+  // composed polynomials (3 deg f' + 3 coefficients) do not fit a SmallPoly keep that sum.
+  const bool start = shape == CellShape::kRestStart;
+  const double len = c.Len(piece, k);
+  const double sign = start ? 1.0 : -1.0;
+  // f^(order) on the cell as a polynomial in sigma: the cell's polynomial in u, with u = sigma^3
+  // from the rest point (a start) or u = 1 - sigma^3 (an end).
+  const auto in_sigma = [&](int order, int a) {
+    const SmallPoly on_cell = c.OnCell(piece, k, order, a);
+    const SmallPoly from_rest = start ? on_cell : Shifted(on_cell, 1.0, -1.0);
+    SmallPoly out = SmallPoly::Zero(3 * (from_rest.size() - 1) + 1);
+    for (int j = 0; j < from_rest.size(); ++j) out(3 * j) = from_rest(j);
+    return out;
+  };
+  // scale sigma^power p, and a + b.
+  const auto times_power = [](const SmallPoly& p, int power, double scale) {
+    SmallPoly out = SmallPoly::Zero(p.size() + power);
+    out.tail(p.size()) = scale * p;
+    return out;
+  };
+  const auto sum = [](const SmallPoly& a, const SmallPoly& b) {
+    SmallPoly out = Padded(a, static_cast<int>(b.size()));
+    out.head(b.size()) += b;
+    return out;
+  };
+  const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(piece)][0].cols()) - 1;  // of f'
+  const bool exact = 3 * std::max(degree1, 0) + 3 <= internal::kMaxSmallPoly;
+  double speed_per_b = 0.0;                           // sum over axes of the velocity bounds squared
+  Eigen::Vector3d acc_per_b = Eigen::Vector3d::Zero();  // C per axis: |acc_axis| <= C b1
   for (int a = 0; a < 3; ++a) {
-    const double m1 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 1, a));
-    const double m2 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 2, a));
-    const double m3 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 3, a));
+    double v_per_sqrt_b, acc_bound, jerk_per_b15;
+    if (exact) {
+      const SmallPoly f1 = in_sigma(1, a), f2 = in_sigma(2, a), f3 = in_sigma(3, a);
+      v_per_sqrt_b = BernsteinMax(c.bernstein, times_power(f1, 2, 1.0));
+      acc_bound = BernsteinMax(c.bernstein, sum(times_power(f1, 1, sign * 2.0 / (3.0 * len)), times_power(f2, 4, 1.0)));
+      jerk_per_b15 = BernsteinMax(
+          c.bernstein, sum(sum(times_power(f1, 0, 2.0 / (9.0 * len * len)), times_power(f2, 3, sign * 2.0 / len)),
+                           times_power(f3, 6, 1.0)));
+    } else {
+      const double m1 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 1, a));
+      const double m2 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 2, a));
+      const double m3 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 3, a));
+      v_per_sqrt_b = m1;
+      acc_bound = m1 / (1.5 * len) + m2;
+      jerk_per_b15 = 2.0 * m1 / (9.0 * len * len) + 2.0 * m2 / len + m3;
+    }
     const auto finish = [&](double per_b, LinearRow::Kind kind, const char* what) {
       if (!(per_b > 0.0)) return;
       c.row.Add(far, per_b);
@@ -201,20 +253,18 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
     };
     const double vmax = limits.max_velocity(a), amax = limits.max_acceleration(a);
     const double jmax = (*limits.max_jerk)(a);
-    finish(m1 * m1 / (vmax * vmax), LinearRow::Kind::kVelocity, "velocity");
-    const double len = c.Len(piece, k);
-    finish((m1 / (1.5 * len) + m2) / amax, LinearRow::Kind::kAcceleration, "acceleration");
-    const double jerk_per_b15 = 2.0 * m1 / (9.0 * len * len) + 2.0 * m2 / len + m3;
+    finish(v_per_sqrt_b * v_per_sqrt_b / (vmax * vmax), LinearRow::Kind::kVelocity, "velocity");
+    finish(acc_bound / amax, LinearRow::Kind::kAcceleration, "acceleration");
     if (jerk_per_b15 > 0.0) {
       const double cap = std::pow(jmax / jerk_per_b15, 2.0 / 3.0);  // b^1.5 C <= j
       finish(1.0 / cap, LinearRow::Kind::kJerk, "jerk");
     }
-    speed_per_b += m1 * m1;
-    acc_per_b(a) = m1 / (1.5 * len) + m2;
+    speed_per_b += v_per_sqrt_b * v_per_sqrt_b;
+    acc_per_b(a) = acc_bound;
   }
   if (!limits.HasNormLimits()) return;
-  // The quadrotor's limits, from the same per-axis bounds |f'_axis| <= M1 and |acc_axis| <= C_axis
-  // b1 (C = M1 / (1.5 ds) + M2): sufficient, linear in b1.
+  // The quadrotor's limits, from the same per-axis bounds |v_axis|^2 <= b1 (its bound above)^2 and
+  // |acc_axis| <= C_axis b1: sufficient, linear in b1.
   const auto row_le = [&](double per_b, double upper, LinearRow::Kind kind, const char* what) {
     if (!(per_b > 0.0)) return;
     c.row.Add(far, per_b);
@@ -524,6 +574,30 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
   c.boundary_b[end ? 1 : 0] = b;
 }
 
+// A rest cell of length h at the start (end = false) or end of piece i moves with constant s-jerk:
+// per axis its jerk is b1^1.5 (f' 2 / (9 h^2) +- f'' 2 sigma^3 / h + f''' sigma^6) (see
+// AddRestCellRows). The largest value over the axes at the rest point (sigma = 0) over the largest
+// anywhere on the cell, each relative to the axis' limit: 1 on a line, less where the curvature
+// makes the jerk grow through the cell, so that the start keeps only that share of its jerk limit.
+// Sampled at 33 points (it only sizes the cell; the rows bound the jerk exactly).
+double RestJerkShare(const TemporalProblem& p, int piece, bool end, double h) {
+  const double sign = end ? -1.0 : 1.0;
+  double at_rest = 0.0, largest = 0.0;
+  for (int q = 0; q <= 32; ++q) {
+    const double sigma = q / 32.0, sigma3 = sigma * sigma * sigma;
+    const double s = end ? 1.0 - h * sigma3 : h * sigma3;
+    const Eigen::Vector3d f1 = p.curve.Evaluate(piece, s, 1), f2 = p.curve.Evaluate(piece, s, 2);
+    const Eigen::Vector3d f3 = p.curve.Evaluate(piece, s, 3);
+    for (int a = 0; a < 3; ++a) {
+      const double jerk = std::abs(f1(a) * 2.0 / (9.0 * h * h) + sign * f2(a) * 2.0 * sigma3 / h + f3(a) * sigma3 * sigma3);
+      const double share = jerk / (*p.limits.max_jerk)(a);
+      largest = std::max(largest, share);
+      if (q == 0) at_rest = std::max(at_rest, share);
+    }
+  }
+  return largest > 0.0 ? at_rest / largest : 1.0;
+}
+
 // Cell edges of a piece in [0, 1]: K cells, with a rest cell at an end that is a rest point sized
 // to the ramp from rest (RampLength): there the vehicle moves with constant s-jerk over the whole
 // cell, which is exactly the jerk-saturated start along a line, and sddot grows like s^(1/3), which
@@ -580,7 +654,13 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
     peak = std::min(peak, std::cbrt(0.5 * length * j * j));
   }
   const double length = peak * peak * peak / (6.0 * j * j);
-  return std::isfinite(length) ? length / speed : 0.0;
+  if (!std::isfinite(length)) return 0.0;
+  // On a curve the s-jerk that starts at the jerk limit along the tangent drives the terms of f''
+  // and f''' up through the cell: halve the cell (at most 5 times) until its constant s-jerk keeps
+  // at least kRestJerkShare of the limit at the rest point.
+  double h = length / speed;
+  for (int halving = 0; halving < 5 && RestJerkShare(p, piece, end, std::min(h, kLargestRestCell)) < kRestJerkShare; ++halving) h *= 0.5;
+  return h;
 }
 
 std::vector<double> CellEdges(int K, double rest_start, double rest_end) {
