@@ -901,6 +901,7 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
   int bandwidth = 1;
   for (const BandedRow& row : p.rows) bandwidth = std::max(bandwidth, row.count - 1);
   for (const Cell& cell : d.cells) {
+    if (cell.time_weight == 0.0 && d.rho == 0.0) continue;  // no time, no regularization (a rest cell's half)
     BandedCell c;
     for (int j = 0; j < 2; ++j) c.b[j] = p.grid_form[static_cast<size_t>(cell.first_grid + j)];
     if (c.b[0].count == 0 && c.b[1].count == 0 && !(c.b[0].constant + c.b[1].constant > 0.0)) {

@@ -5,8 +5,10 @@
 // + P2 u^2, so sddot = b' / 2 is (P1 - P0) / L at the start and (P2 - P1) / L at the end. Its three
 // half-grid values are P0, (P0 + 2 P1 + P2) / 4 and P2. The knots follow from continuity of sddot:
 //   between regular cells k - 1 and k:  P = (L_k P1_{k-1} + L_{k-1} P1_k) / (L_{k-1} + L_k);
-//   after a rest cell of length L0 (b = b1 u^(4/3), sddot = 2 b1 / (3 L0) at its end):
-//                                       b1 = P1_1 / (1 + 2 L1 / (3 L0)), and its mirror;
+//   after a rest cell of length L0 (b = w^4 q(w), q = alpha (1 - w) + b1 w in its time fraction w,
+//   sddot = (5 b1 - alpha) / (6 L0) at its end; alpha, its middle value, is a control):
+//                                       b1 = (alpha / (6 L0) + P1_1 / L1) / (5 / (6 L0) + 1 / L1),
+//                                       and its mirror;
 //   at a boundary whose sddot a is given: P1 = P0 + a L (start) or P2 - a L (end), a constant;
 //   at a joint without a stop, with b after it = rho b before it (rho the ratio of the shared grid
 //   value's scales) and the tangential acceleration equal on both sides, |f'+|^2 sddot+ =
@@ -103,7 +105,7 @@ bool ToControlForm(const Form& f, ControlForm* out) {
 
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
                                               const std::optional<double> (&boundary_sddot)[2],
-                                              const std::optional<double> (&boundary_b)[2], const double rest_middle) {
+                                              const std::optional<double> (&boundary_b)[2]) {
   const int m = d.num_pieces;
   const int K = static_cast<int>(d.shapes.size()) / std::max(m, 1);
   if (m <= 0 || K <= 0 || static_cast<int>(d.shapes.size()) != m * K) return std::nullopt;
@@ -119,6 +121,8 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   // P1 of every regular cell (path order) and the knots of every piece.
   std::vector<Form> p1(static_cast<size_t>(m * K));
   std::vector<bool> has_p1(static_cast<size_t>(m * K), false);
+  // The middle value of every rest cell (q at its rest point), a control of its own.
+  std::vector<Form> alpha(static_cast<size_t>(m * K));
   // A boundary value bound by nothing (tangent and curvature vanish: no row fixes b) is a control
   // of its own, before the first P1 or after the last.
   Form free_boundary[2];
@@ -134,7 +138,16 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   add_free_boundary(0);
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) {
-      if (shape(i, k) != CellShape::kQuadratic) continue;
+      if (shape(i, k) != CellShape::kQuadratic) {
+        const int g = d.GridIndex(i, 2 * k + 1);
+        const GridValue& mid = d.grid[static_cast<size_t>(g)];
+        if (mid.var < 0 || !(mid.scale > 0.0)) return std::nullopt;
+        alpha[static_cast<size_t>(i * K + k)] = Form::Control(basis.num_controls++, mid.scale);
+        basis.middle.push_back(g);
+        basis.at_knot.push_back(1);  // read back as the grid value itself
+        basis.scale.push_back(mid.scale);
+        continue;
+      }
       Form& f = p1[static_cast<size_t>(i * K + k)];
       has_p1[static_cast<size_t>(i * K + k)] = true;
       const bool first = i == 0 && k == 0, last = i == m - 1 && k == K - 1;
@@ -208,11 +221,15 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         const double l0 = len(i, k - 1), l1 = len(i, k);
         f = Combine(*P1(i, k - 1), l1 / (l0 + l1), *P1(i, k), l0 / (l0 + l1), &ok);
       } else if (left == CellShape::kRestStart && right == CellShape::kQuadratic) {
-        f = Form();
-        ok = ok && f.Add(*P1(i, k), 1.0 / (1.0 + 2.0 * len(i, k) / (3.0 * len(i, k - 1))));
+        // (5 b1 - alpha) / (6 L0) = (P1 - b1) / L1.
+        const double l0 = len(i, k - 1), l1 = len(i, k), denominator = 5.0 / (6.0 * l0) + 1.0 / l1;
+        f = Combine(alpha[static_cast<size_t>(i * K + k - 1)], 1.0 / (6.0 * l0) / denominator, *P1(i, k),
+                    1.0 / l1 / denominator, &ok);
       } else if (left == CellShape::kQuadratic && right == CellShape::kRestEnd) {
-        f = Form();
-        ok = ok && f.Add(*P1(i, k - 1), 1.0 / (1.0 + 2.0 * len(i, k - 1) / (3.0 * len(i, k))));
+        // The mirror: (b0 - P1) / L1 = -(5 b0 - alpha) / (6 L0).
+        const double l1 = len(i, k - 1), l0 = len(i, k), denominator = 5.0 / (6.0 * l0) + 1.0 / l1;
+        f = Combine(*P1(i, k - 1), 1.0 / l1 / denominator, alpha[static_cast<size_t>(i * K + k)],
+                    1.0 / (6.0 * l0) / denominator, &ok);
       } else {
         return std::nullopt;
       }
@@ -231,10 +248,8 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
           ok = ok && middle.Add(a, 0.25) && middle.Add(*P1(i, k), 0.5) && middle.Add(b, 0.25);
           break;
         case CellShape::kRestStart:
-          ok = ok && middle.Add(b, rest_middle);
-          break;
         case CellShape::kRestEnd:
-          ok = ok && middle.Add(a, rest_middle);
+          ok = ok && middle.Add(alpha[static_cast<size_t>(i * K + k)], 1.0);
           break;
         case CellShape::kLinear:  // not a shape of the jerk-limited grid
           return std::nullopt;

@@ -165,6 +165,7 @@ double TemporalDiscretization::GridB(int g, const std::vector<double>& x) const 
 double TemporalDiscretization::Objective(const std::vector<double>& x, double* total_time) const {
   double time = 0.0, reg = 0.0;
   for (const Cell& c : cells) {
+    if (c.time_weight == 0.0 && rho == 0.0) continue;  // no time, no regularization (a rest cell's half)
     const double b0 = std::max(0.0, GridB(c.first_grid, x));
     const double b1 = std::max(0.0, GridB(c.first_grid + 1, x));
     const double root = std::sqrt(b0) + std::sqrt(b1);

@@ -201,12 +201,16 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
                                   const std::function<std::string()>& where, RowBuilder& row,
                                   TemporalDiscretization* d);
 
-// A linearized jerk row of a regular cell before its linearization point bbar is known (the
-// sequential convex programme's rows, see jerk_discretization.cpp): the row is
+// A linearized jerk row of a cell before its linearization point bbar is known (the sequential
+// convex programme's rows, see jerk_discretization.cpp): the row is
 //   sum_j (a[j] 2 sqrt(bbar) / (3 jmax) + basis[j] / (3 bbar)) b_{g0 + j} <= 1
-// over the cell's three half-grid values, with bbar = LinearizationPoint of the cell.
+// over the cell's three half-grid values, with bbar = LinearizationPoint of a regular cell, or for
+// a part [w0, w1] of a rest cell (rest_far >= 0) the largest q there, q(w) = alpha (1 - w) + b_far w
+// with alpha its middle value and b_far the value g0 + rest_far (at least the same floor).
 struct JerkRowTemplate {
   int g0 = 0;
+  int rest_far = -1;
+  double w0 = 0.0, w1 = 1.0;
   double jmax = 0.0;
   std::array<double, 3> a{};
   std::array<double, 3> basis{};
@@ -225,6 +229,14 @@ struct JerkTemplates {
 // acceleration and jerk rows (JerkRows::kNone otherwise), which go to *templates instead, over grid
 // values (no rows over the free values to build). Its rows alone are not the problem.
 TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates);
+// A jerk-limited rest cell's middle half-grid value is q at its rest point (alpha; see
+// jerk_discretization.cpp), where a profile holds b at the cell's middle in s. In place on b at
+// every half-grid value of the jerk-limited d: alpha to b at the middle, and back (alpha clamped at
+// 0, for a guess from a profile of other cells).
+void RestAlphaToMiddles(const TemporalDiscretization& d, std::vector<double>* b);
+void RestMiddlesToAlpha(const TemporalDiscretization& d, std::vector<double>* b);
+// alpha of a constant s-jerk (b at the far end) in every rest cell's middle value.
+void RestAlphaOfConstantJerk(const TemporalDiscretization& d, std::vector<double>* b);
 // The linearization point of a cell's jerk rows: the largest b of the quadratic through the
 // previous solution's three half-grid values lb, at least floor.
 double LinearizationPoint(const double (&lb)[3], double floor);
@@ -233,12 +245,12 @@ double LinearizationFloor(const std::vector<double>& linearization);
 
 // The control values of a jerk-limited discretization (ControlBasis; control_basis.cpp), from its
 // shapes, cell edges, grid values and joints, with the sddot that a boundary acceleration fixes at
-// the start and the end (none where it fixes none) and b in a rest cell's middle over b at its
-// far end. A boundary where the tangent vanishes has b fixed by its acceleration instead
+// the start and the end (none where it fixes none). A rest cell's middle value (q at its rest
+// point, see jerk_discretization.cpp) is a control of its own. A boundary where the tangent vanishes has b fixed by its acceleration instead
 // (boundary_b) and sddot free. Checked against every equality row of d; none when a case is not
 // covered.
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
                                               const std::optional<double> (&boundary_sddot)[2],
-                                              const std::optional<double> (&boundary_b)[2], double rest_middle);
+                                              const std::optional<double> (&boundary_b)[2]);
 
 }  // namespace timeopt::internal

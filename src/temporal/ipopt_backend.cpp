@@ -47,6 +47,7 @@ IpoptTemporalNlp::IpoptTemporalNlp(const TemporalDiscretization& d) : d_(d) {
   std::vector<std::int64_t> keys;
   keys.reserve(3 * d.cells.size());
   for (const Cell& cell : d.cells) {
+    if (cell.time_weight == 0.0 && d.rho == 0.0) continue;  // no time, no regularization (a rest cell's half)
     CellTerms c;
     c.ds = cell.ds;
     c.tw = cell.ds * cell.time_weight;

@@ -17,12 +17,12 @@
 // three values (the Bernstein coefficients of that polynomial in u; see AddExactJerkRows).
 //
 // A cell that leaves rest (b = 0 and sddot = 0 at its start: a hover start, or after a stop) cannot
-// have sddot linear in s (the time would be infinite). It moves with constant s-jerk: b = b1 (u)^(4/3),
-// so the middle value is 2^(-4/3) b1 (an equality row), the cell takes 3 ds / sqrt(b1), and with the
-// curve's largest |f'|, |f''|, |f'''| on the cell (M1, M2, M3, from Bernstein coefficients):
-//   |v| <= M1 sqrt(b1),  |acc| <= M1 b1 / (1.5 ds) + M2 b1,
-//   |jerk| <= b1^1.5 (2 M1 / (9 ds^2) + 2 M2 / ds + M3),
-// bounds on b1 alone (the jerk one exact, not linearized). A cell that reaches rest is the mirror.
+// have sddot linear in s (the time would be infinite). In its time fraction w it moves as s = s_k +
+// L w^3, b = w^4 q(w) with q linear (RestPolys): a constant s-jerk when q is constant, easing off or
+// building up otherwise. Its middle value is q at the rest point (alpha), its rows are those of a
+// regular cell with polynomials in w, and it takes exactly 6 L / (sqrt(alpha) + sqrt(b1)). A cell
+// that reaches rest is the mirror. (Pieces of degree above 10 keep a constant s-jerk:
+// AddConstantJerkRestRows.)
 //
 // sddot is continuous: equality rows at every full grid point between cells and, at a joint
 // without a stop, the tangential part of acc = f' a + f'' b equal on both sides (a joint whose
@@ -31,8 +31,8 @@
 // the end, the part across it must equal f'' sdot^2 or the problem is infeasible.
 //
 // The time of the half cells in the objective is the paper's 2 h / (sqrt(b^j) + sqrt(b^{j+1}))
-// (an approximation of the quadratic's time; the reported T is the profile's exact time); rest
-// cells weight theirs so that it equals 3 ds / sqrt(b1) exactly.
+// (an approximation of the quadratic's time; the reported T is the profile's exact time); a rest
+// cell's two half cells are weighted 0 and 6 so that their sum is its exact time.
 
 #include <algorithm>
 #include <cmath>
@@ -59,28 +59,33 @@ using internal::SmallPoly;
 using internal::kAxisNames;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// b in the middle of a rest cell over b at its far end: (1/2)^(4/3).
-const double kRestMiddle = std::pow(0.5, 4.0 / 3.0);
-// The rest cell's two half-cell times 2 h / (sqrt(b^j) + sqrt(b^{j+1})) with b = 0, kRestMiddle
-// b1, b1 sum to (2^(2/3) + 1 / (1 + 2^(-2/3))) ds / sqrt(b1); weighting them by this factor makes
-// the sum the exact 3 ds / sqrt(b1).
-const double kRestTimeWeight =
-    3.0 / (std::pow(2.0, 2.0 / 3.0) + 1.0 / (1.0 + std::pow(2.0, -2.0 / 3.0)));
 // Relative tolerance for "the boundary acceleration's part across the path equals f'' sdot^2"
 // and "the curvature is continuous across a joint": rounding of fitted curves is ~1e-12.
 constexpr double kNormalTolerance = 1e-6;
 // The jerk rows' smallest linearization point relative to the largest b (see bbar_floor).
 constexpr double kLinearizationFloor = 1e-4;
-// The share of the jerk limit a rest cell keeps at its rest point (RestJerkShare), at least.
-// Against the time-domain reference on 12 rest-to-rest cubics and quintics at K = 50
-// (tests/temporal/time_domain_reference.h), 0.8 / 0.9 / 0.95 / 0.97 left 5 / 6 / 8 / 7 of them
-// within 0.5% of its T (5 without halving; 1 with the earlier bounds of AddRestCellRows).
-constexpr double kRestJerkShare = 0.95;
+// The share of the jerk limit a constant s-jerk over a rest cell keeps at its rest point
+// (RestJerkShare), at least; the cell is halved until it does. Against the time-domain reference
+// on 12 rest-to-rest cubics and quintics (time_domain_reference_test.cpp), 0.9 left the smallest
+// gaps of 0 (no halving), 0.8, 0.9 and 0.95 (on the curve that it halves most, +1.10% at K = 50,
+// against +1.21 / +1.03 / +1.20%; no curve worse than with 0.95). 1 on a line: no halving there.
+constexpr double kRestJerkShare = 0.9;
+// The growth of the cells after a halved rest cell (CellEdges).
+constexpr double kRestGrading = 1.25;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
 constexpr double kLargestRestCell = 0.25;
-// Parts of a cell with their own linearization of the jerk rows (see AddQuadraticCellRows).
+// Parts of a regular cell with their own linearization of the jerk rows (see AddCellRows).
 constexpr int kJerkSegments = 1;
+// A rest cell's q can vary much more over the cell (alpha against b_far) than a regular cell's b:
+// its jerk rows are linearized on kRestJerkParts equal parts of w, each at the largest q of the
+// previous solution there. On the 12 reference curves (time_domain_reference_test.cpp) one part
+// left T up to 0.06 points of a percent further from the reference, four gained nothing over two.
+constexpr int kRestJerkParts = 2;
+
+// The half-grid value of a rest cell that holds alpha (its middle) and the far one, relative to g0.
+constexpr int kRestAlpha = 1;
+int RestFar(CellShape shape) { return shape == CellShape::kRestStart ? 2 : 0; }
 
 // Ascending coefficients (in u) of the Lagrange basis on u = 0, 1/2, 1 and its derivatives.
 const SmallPoly& Basis(int j) {
@@ -167,26 +172,37 @@ void AddCellAcceleration(JerkContext& c, int piece, int k, bool at_end, double c
   const CellShape shape = c.d.shapes[static_cast<size_t>(piece * c.K + k)];
   const int g0 = c.Half(piece, 2 * k);
   const double len = c.Len(piece, k);
+  // A rest cell's sddot at its far end is +-(5 b_far - alpha) / (6 L) (RestPolys; 0 at the rest
+  // point).
   if (shape == CellShape::kRestStart) {
-    if (at_end) c.row.Add(g0 + 2, coef / (1.5 * len));
-    return;  // 0 at its start
+    if (at_end) {
+      c.row.Add(g0 + 2, 5.0 * coef / (6.0 * len));
+      c.row.Add(g0 + kRestAlpha, -coef / (6.0 * len));
+    }
+    return;
   }
   if (shape == CellShape::kRestEnd) {
-    if (!at_end) c.row.Add(g0, -coef / (1.5 * len));
+    if (!at_end) {
+      c.row.Add(g0, -5.0 * coef / (6.0 * len));
+      c.row.Add(g0 + kRestAlpha, coef / (6.0 * len));
+    }
     return;
   }
   const double* slope = at_end ? kSlopeAtEnd : kSlopeAtStart;
   for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, coef * slope[j] / (2.0 * len));
 }
 
-void AddRestCellRows(JerkContext& c, int piece, int k) {
+// A rest cell of a piece whose RestPolys do not fit (degree above 10): a constant s-jerk, its middle
+// value (alpha) equal to b at its far end, bounded by rows on that value alone. (The structured
+// path has no control basis for it; the general path solves such problems.)
+void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   const CellShape shape = c.d.shapes[static_cast<size_t>(piece * c.K + k)];
   const int g0 = c.Half(piece, 2 * k);
   const int far = shape == CellShape::kRestStart ? g0 + 2 : g0;
   const TemporalLimits& limits = c.problem.limits;
-  // The shape: b in the middle is kRestMiddle times b at the far end.
-  c.row.Add(g0 + 1, 1.0);
-  c.row.Add(far, -kRestMiddle);
+  // A constant s-jerk: alpha (the middle value) is b at the far end.
+  c.row.Add(g0 + kRestAlpha, 1.0);
+  c.row.Add(far, -1.0);
   c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
     return "rest cell shape in piece " + std::to_string(piece) + " cell " + std::to_string(k);
   });
@@ -283,18 +299,20 @@ void AddRestCellRows(JerkContext& c, int piece, int k) {
   }
 }
 
-// The exact jerk rows of a regular cell on axis a (JerkRows::kExact): |jerk| <= j is b P^2 <= j^2
-// on the whole cell, with P = sum_j b_j P_j(u) and b = sum_j b_j L_j(u). b P^2 is a polynomial in
+// The exact jerk rows of a cell on axis a (JerkRows::kExact): |jerk| <= j is b P^2 <= j^2 on the
+// whole cell, with P = sum_j b_j P_j(u) and b = sum_j b_j basis_j(u) (the Lagrange basis L_j, or a
+// rest cell's q and its own P in w). b P^2 is a polynomial in
 // u whose coefficients are cubic forms in the cell's three values; each of its Bernstein
 // coefficients <= j^2 makes one CubicRow (all of them together imply the limit on the cell).
-void AddExactJerkRows(JerkContext& c, int piece, int k, const SmallPoly (&jerk)[3], double jmax) {
+void AddExactJerkRows(JerkContext& c, int piece, int k, const SmallPoly (&jerk)[3], const SmallPoly (&basis)[3],
+                      double jmax) {
   const int g0 = c.Half(piece, 2 * k);
   SmallPoly product[3][3][3];
   int size = 0;
   for (int j = 0; j < 3; ++j) {
     for (int q = 0; q < 3; ++q) {
       for (int l = q; l < 3; ++l) {
-        product[j][q][l] = Multiply(Multiply(Basis(j), jerk[q]), jerk[l]);
+        product[j][q][l] = Multiply(Multiply(basis[j], jerk[q]), jerk[l]);
         size = std::max(size, static_cast<int>(product[j][q][l].size()));
       }
     }
@@ -364,16 +382,106 @@ void AddQuadrotorCellRows(JerkContext& c, int piece, int k, const SmallPoly (&sp
   }
 }
 
-void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vector<double>* lin) {
+// A rest cell (b = 0 and sddot = 0 at its rest point) in its own time coordinate w in [0, 1] from
+// the rest point (see temporal_profile.h): s = s_rest +- L w^3 and b = w^4 q(w) with q linear,
+// q = alpha (1 - w) + b_far w. Its middle half-grid value is alpha (q at the rest point), not b at
+// the middle, so that the cell's time is the exact 6 L / (sqrt(alpha) + sqrt(b_far)) of two values
+// (the half cell (alpha, b_far) with weight 6, the other with weight 0). Per axis, with f^(n) at
+// s(w) and the upper signs for a start (the lower for an end, which brakes while its s-jerk is
+// positive):
+//   v = f' w^2 sqrt(q),   acc = +-f' w (4 alpha + 5 beta w) / (6 L) + f'' w^4 q,
+//   jerk = sqrt(q) P,   P = f' (4 alpha + 10 beta w) / (18 L^2) +- f'' w^3 (4 alpha + 5 beta w) / (2 L)
+//                           + f''' w^6 q,
+// with beta = b_far - alpha: polynomials in w linear in (alpha, b_far), like a regular cell's in u
+// and its three values. The jerk has the same form sqrt(q) P as a regular cell's sqrt(b) P, so the
+// same linearization (at the largest q on the cell, max(alpha, b_far)) or exact cubic rows bound it.
+// beta = 0 is a constant s-jerk from rest (the only rest shape before), exact on a line; beta < 0
+// lets the s-jerk ease off as the curvature terms grow.
+struct RestPolys {
+  SmallPoly q[3];            // q per half-grid value of the cell (0 at the rest point's)
+  SmallPoly vel[3][3];       // f'^2 w^4 q: v^2, [axis][value]
+  SmallPoly acc[3][3];       // [axis][value]
+  SmallPoly jerk[3][3];      // P, [axis][value]
+};
+
+// RestPolys of cell k of piece i, or false when the composed polynomials do not fit a SmallPoly
+// (pieces of degree above 10 keep a constant s-jerk, AddConstantJerkRestRows).
+bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
+  const CellShape shape = c.d.shapes[static_cast<size_t>(piece * c.K + k)];
+  const bool start = shape == CellShape::kRestStart;
+  const double sign = start ? 1.0 : -1.0, L = c.Len(piece, k);
+  const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(piece)][0].cols()) - 1;  // of f'
+  // The largest polynomials: v^2 = f'^2 w^4 q, 6 deg f' + 6 coefficients, and the exact rows' q P^2,
+  // 6 deg f' + 4.
+  if (6 * std::max(degree1, 0) + 6 > internal::kMaxSmallPoly) return false;
+  // f^(order) on the cell as a polynomial in w: the cell's polynomial in u, with u = w^3 from the
+  // rest point (a start) or u = 1 - w^3 (an end).
+  const auto in_w = [&](int order, int a) {
+    const SmallPoly on_cell = c.OnCell(piece, k, order, a);
+    const SmallPoly from_rest = start ? on_cell : Shifted(on_cell, 1.0, -1.0);
+    SmallPoly out = SmallPoly::Zero(3 * (from_rest.size() - 1) + 1);
+    for (int j = 0; j < from_rest.size(); ++j) out(3 * j) = from_rest(j);
+    return out;
+  };
+  // scale w^power p, and sums.
+  const auto shifted_up = [](const SmallPoly& p, int power, double scale) {
+    SmallPoly out = SmallPoly::Zero(p.size() + power);
+    out.tail(p.size()) = scale * p;
+    return out;
+  };
+  const auto sum = [](const SmallPoly& a, const SmallPoly& b) {
+    SmallPoly out = Padded(a, static_cast<int>(b.size()));
+    out.head(b.size()) += b;
+    return out;
+  };
+  const int rest = start ? 0 : 2, alpha = kRestAlpha, far = RestFar(shape);
+  // Per value (alpha, b_far): q, sddot's factor, the jerk's three factors.
+  SmallPoly q[3], sddot[3], j1[3], j2[3];
+  q[rest] = sddot[rest] = j1[rest] = j2[rest] = Constant(0.0);
+  q[alpha] = (SmallPoly(2) << 1.0, -1.0).finished();
+  q[far] = (SmallPoly(2) << 0.0, 1.0).finished();
+  // sddot = w (4 alpha + 5 beta w) / (6 L) = [alpha (4 w - 5 w^2) + b_far 5 w^2] / (6 L)
+  sddot[alpha] = (SmallPoly(3) << 0.0, 4.0, -5.0).finished() * (sign / (6.0 * L));
+  sddot[far] = (SmallPoly(3) << 0.0, 0.0, 5.0).finished() * (sign / (6.0 * L));
+  // (4 alpha + 10 beta w) / (18 L^2) and +-w^3 (4 alpha + 5 beta w) / (2 L), per value.
+  j1[alpha] = (SmallPoly(2) << 4.0, -10.0).finished() / (18.0 * L * L);
+  j1[far] = (SmallPoly(2) << 0.0, 10.0).finished() / (18.0 * L * L);
+  j2[alpha] = (SmallPoly(5) << 0.0, 0.0, 0.0, 4.0, -5.0).finished() * (sign / (2.0 * L));
+  j2[far] = (SmallPoly(5) << 0.0, 0.0, 0.0, 0.0, 5.0).finished() * (sign / (2.0 * L));
+  for (int j = 0; j < 3; ++j) out->q[j] = q[j];
+  for (int a = 0; a < 3; ++a) {
+    const SmallPoly f1 = in_w(1, a), f2 = in_w(2, a), f3 = in_w(3, a);
+    for (int j = 0; j < 3; ++j) {
+      const SmallPoly b = shifted_up(q[j], 4, 1.0);  // w^4 q = sdot^2
+      out->vel[a][j] = Multiply(Multiply(f1, f1), b);
+      out->acc[a][j] = sum(Multiply(f1, sddot[j]), Multiply(f2, b));
+      out->jerk[a][j] = sum(sum(Multiply(f1, j1[j]), Multiply(f2, j2[j])), Multiply(f3, shifted_up(q[j], 6, 1.0)));
+    }
+  }
+  return true;
+}
+
+// The velocity, acceleration and jerk rows of a regular cell (b quadratic in u through its three
+// half-grid values), or of a rest cell given its RestPolys (b = w^4 q, q linear; see above): the
+// same rows over the cell's three values, from the polynomials of each.
+void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vector<double>* lin,
+                 const RestPolys* rest) {
   const int g0 = c.Half(piece, 2 * k);
   const TemporalLimits& limits = c.problem.limits;
   const double ds = c.Len(piece, k);
-  // b >= 0 on the whole cell: its Bernstein coefficients b0, 2 bm - (b0 + b1) / 2, b1 (the end
-  // values are >= 0 already).
-  c.row.Add(g0 + 1, -2.0);
-  c.row.Add(g0, 0.5);
-  c.row.Add(g0 + 2, 0.5);
+  if (rest == nullptr) {
+    // b >= 0 on the whole cell: its Bernstein coefficients b0, 2 bm - (b0 + b1) / 2, b1 (the end
+    // values are >= 0 already).
+    c.row.Add(g0 + 1, -2.0);
+    c.row.Add(g0, 0.5);
+    c.row.Add(g0 + 2, 0.5);
+  } else {
+    c.row.Add(g0 + kRestAlpha, -1.0);  // q >= 0 on the cell: alpha >= 0 (b_far is)
+  }
   c.row.Finish(LinearRow::Kind::kVelocity, -kInf, 0.0, [&] { return std::string("b >= 0"); });
+  // The quantity under the jerk's square root per value: b's basis, or a rest cell's q.
+  SmallPoly root_basis[3];
+  for (int j = 0; j < 3; ++j) root_basis[j] = rest == nullptr ? Basis(j) : rest->q[j];
 
   // The quadrotor's limits: the speed's polynomials summed over axes, the acceleration's per axis.
   const bool quadrotor = limits.HasNormLimits();
@@ -386,7 +494,17 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
     const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
     SmallPoly vel[3], acc[3], jerk[3];
     const SmallPoly q2 = Multiply(q, q);
-    for (int j = 0; j < 3; ++j) {
+    for (int j = 0; j < 3 && rest != nullptr; ++j) {
+      vel[j] = rest->vel[a][j];
+      acc[j] = rest->acc[a][j];
+      jerk[j] = rest->jerk[a][j];
+      if (quadrotor) {
+        const int size = static_cast<int>(std::max(speed[j].size(), vel[j].size()));
+        speed[j] = Padded(speed[j], size) + Padded(vel[j], size);
+        acceleration[a][j] = acc[j];
+      }
+    }
+    for (int j = 0; j < 3 && rest == nullptr; ++j) {
       vel[j] = Multiply(q2, Basis(j));
       acc[j] = Padded(Multiply(q, BasisDerivative(j)) / (2.0 * ds), 0);
       const SmallPoly curvature = Multiply(p2, Basis(j));
@@ -455,28 +573,47 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
     if (std::isfinite(amax)) {
       emit(acc, true, amax, LinearRow::Kind::kAcceleration);
     }
-    if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, jmax);
+    if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, root_basis, jmax);
     if (mode == JerkRows::kNone && c.templates != nullptr) {
       int size = 0;
-      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), Basis(j).size())));
+      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
       SmallPoly bern_jerk[3];
       for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
-      // The basis in Bernstein form depends on the size alone: converted once per size.
-      if (c.basis_size != size) {
+      // The basis in Bernstein form depends on the size alone: converted once per size (a rest
+      // cell's q each time).
+      SmallPoly rest_bernstein[3];
+      if (rest != nullptr) {
+        for (int j = 0; j < 3; ++j) rest_bernstein[j] = c.bernstein.Convert(Padded(root_basis[j], size));
+      } else if (c.basis_size != size) {
         for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
         c.basis_size = size;
       }
-      const SmallPoly (&bern_basis)[3] = c.basis_bernstein;
-      for (const double sign : {1.0, -1.0}) {
-        for (int i = 0; i < size; ++i) {
-          internal::JerkRowTemplate t;
-          t.g0 = g0;
-          t.jmax = jmax;
+      const SmallPoly (&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
+      const int parts = rest != nullptr ? kRestJerkParts : 1;
+      for (int part = 0; part < parts; ++part) {
+        const double w0 = static_cast<double>(part) / parts, w1 = (part + 1.0) / parts;
+        if (rest != nullptr) {
           for (int j = 0; j < 3; ++j) {
-            t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
-            t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
+            bern_jerk[j] = c.bernstein.Convert(Shifted(Padded(jerk[j], size), w0, w1 - w0));
+            rest_bernstein[j] = c.bernstein.Convert(Shifted(Padded(root_basis[j], size), w0, w1 - w0));
           }
-          c.templates->jerk_rows.push_back(t);
+        }
+        for (const double sign : {1.0, -1.0}) {
+          for (int i = 0; i < size; ++i) {
+            internal::JerkRowTemplate t;
+            t.g0 = g0;
+            t.jmax = jmax;
+            if (rest != nullptr) {
+              t.rest_far = RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]);
+              t.w0 = w0;
+              t.w1 = w1;
+            }
+            for (int j = 0; j < 3; ++j) {
+              t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
+              t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
+            }
+            c.templates->jerk_rows.push_back(t);
+          }
         }
       }
     }
@@ -490,12 +627,18 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
       const auto previous_b = [&](double u) {
         return lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1);
       };
-      for (int part = 0; part < kJerkSegments; ++part) {
-        const double u0 = static_cast<double>(part) / kJerkSegments, u1 = (part + 1.0) / kJerkSegments;
+      const int parts = rest != nullptr ? kRestJerkParts : kJerkSegments;
+      for (int part = 0; part < parts; ++part) {
+        const double u0 = static_cast<double>(part) / parts, u1 = (part + 1.0) / parts;
         double b = std::max(previous_b(u0), previous_b(u1));
+        if (rest != nullptr) {
+          // A rest cell's q is linear: its largest value on the part is at an end of it.
+          const double alpha = lb[kRestAlpha], far = lb[RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)])];
+          b = std::max(alpha + (far - alpha) * u0, alpha + (far - alpha) * u1);
+        }
         // The quadratic's vertex inside the part.
         const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
-        if (c2 < 0.0) {
+        if (c2 < 0.0 && rest == nullptr) {
           const double vertex = -c1 / (2.0 * c2);
           if (vertex > u0 && vertex < u1) b = std::max(b, previous_b(vertex));
         }
@@ -509,7 +652,7 @@ void AddQuadraticCellRows(JerkContext& c, int piece, int k, JerkRows mode, const
         SmallPoly part_jerk[3];
         for (int j = 0; j < 3; ++j) {
           part_jerk[j] = Shifted(jerk[j], u0, u1 - u0);
-          const SmallPoly basis = Shifted(Basis(j), u0, u1 - u0);
+          const SmallPoly basis = Shifted(root_basis[j], u0, u1 - u0);
           const int size = static_cast<int>(std::max(part_jerk[j].size(), basis.size()));
           part_basis[j] = Padded(basis, size);
           part_jerk[j] = Padded(part_jerk[j], size);
@@ -574,9 +717,9 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
   c.boundary_b[end ? 1 : 0] = b;
 }
 
-// A rest cell of length h at the start (end = false) or end of piece i moves with constant s-jerk:
-// per axis its jerk is b1^1.5 (f' 2 / (9 h^2) +- f'' 2 sigma^3 / h + f''' sigma^6) (see
-// AddRestCellRows). The largest value over the axes at the rest point (sigma = 0) over the largest
+// A rest cell of length h at the start (end = false) or end of piece i with a constant s-jerk: per
+// axis its jerk is b1^1.5 (f' 2 / (9 h^2) +- f'' 2 sigma^3 / h + f''' sigma^6) (see
+// AddConstantJerkRestRows). The largest value over the axes at the rest point (sigma = 0) over the largest
 // anywhere on the cell, each relative to the axis' limit: 1 on a line, less where the curvature
 // makes the jerk grow through the cell, so that the start keeps only that share of its jerk limit.
 // Sampled at 33 points (it only sizes the cell; the rows bound the jerk exactly).
@@ -654,23 +797,47 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
     peak = std::min(peak, std::cbrt(0.5 * length * j * j));
   }
   const double length = peak * peak * peak / (6.0 * j * j);
-  if (!std::isfinite(length)) return 0.0;
-  // On a curve the s-jerk that starts at the jerk limit along the tangent drives the terms of f''
-  // and f''' up through the cell: halve the cell (at most 5 times) until its constant s-jerk keeps
-  // at least kRestJerkShare of the limit at the rest point.
-  double h = length / speed;
-  for (int halving = 0; halving < 5 && RestJerkShare(p, piece, end, std::min(h, kLargestRestCell)) < kRestJerkShare; ++halving) h *= 0.5;
-  return h;
+  return std::isfinite(length) ? length / speed : 0.0;
 }
 
-std::vector<double> CellEdges(int K, double rest_start, double rest_end) {
+// The rest cell at the start (end = false) or end of piece i: the ramp from rest (RampLength),
+// halved (at most 5 times) until a constant s-jerk over it keeps at least kRestJerkShare of the
+// jerk limit at the rest point (on a curve the terms of f'' and f''' grow through the cell).
+struct RestSize {
+  double cell = 0.0;  // the rest cell's length in s (0: none)
+  bool halved = false;
+};
+RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_to_rest) {
+  RestSize r;
+  r.cell = RampLength(p, piece, end, rest_to_rest);
+  if (!(r.cell > 0.0)) return r;
+  for (int halving = 0; halving < 5 && RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell)) < kRestJerkShare;
+       ++halving) {
+    r.cell *= 0.5;
+    r.halved = true;
+  }
+  return r;
+}
+
+std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize& rest_end) {
   const double ds = 1.0 / K;
-  // The cells of one end, from the rest point on. A ramp of at least half a nominal cell gets one
-  // rest cell of its length (at most a quarter of the piece); a shorter one h, h, 2 h, ..., 2^(n-1) h
-  // with the last one widened so that they sum to ds.
-  const auto graded = [&](double h) {
+  // The cells of one end, from the rest point on. A rest cell halved below its ramp (RestSize) is
+  // followed by cells growing by kRestGrading up to the nominal cell, which carry on the ramp
+  // (sdot grows like the time squared there, and a cell whose ends differ much in sdot holds its
+  // jerk well below the limit at its start). Otherwise, a ramp of at least half a nominal cell gets
+  // one rest cell of its length (at most a quarter of the piece); a shorter one h, h, 2 h, ...,
+  // 2^(n-1) h with the last one widened so that they sum to ds. At most K / 3 cells per end.
+  const auto graded = [&](const RestSize& rest) {
     std::vector<double> g;
+    double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
+    if (rest.halved) {
+      g.push_back(std::min(std::max(h, kSmallestRestCell * ds), kLargestRestCell));
+      for (double next = g.back() * kRestGrading; next < ds && static_cast<int>(g.size()) < K / 3; next *= kRestGrading) {
+        g.push_back(next);
+      }
+      return g;
+    }
     if (h >= 0.5 * ds) {
       g.push_back(std::min(h, kLargestRestCell));
       return g;
@@ -735,6 +902,41 @@ double LinearizationPoint(const double (&lb)[3], double floor) {
     if (u > 0.0 && u < 1.0) b = std::max(b, lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1));
   }
   return std::max(b, floor);
+}
+
+namespace {
+// w = 2^(-1/3) at a rest cell's middle in s (w^3 = 1/2), and b = w^4 q there.
+constexpr double kRestMiddleW = 0.7937005259840998;
+template <typename F>
+void ForEachRestCell(const TemporalDiscretization& d, F f) {
+  const int K = d.cells_per_piece / 2;
+  for (int i = 0; i < d.num_pieces; ++i) {
+    for (int k = 0; k < K; ++k) {
+      const CellShape shape = d.shapes[static_cast<size_t>(i * K + k)];
+      if (shape == CellShape::kQuadratic) continue;
+      const size_t g0 = static_cast<size_t>(d.GridIndex(i, 2 * k));
+      f(g0 + kRestAlpha, g0 + static_cast<size_t>(RestFar(shape)));
+    }
+  }
+}
+}  // namespace
+
+void RestAlphaToMiddles(const TemporalDiscretization& d, std::vector<double>* b) {
+  const double w4 = std::pow(kRestMiddleW, 4.0);
+  ForEachRestCell(d, [&](size_t alpha, size_t far) {
+    (*b)[alpha] = w4 * ((*b)[alpha] * (1.0 - kRestMiddleW) + (*b)[far] * kRestMiddleW);
+  });
+}
+
+void RestMiddlesToAlpha(const TemporalDiscretization& d, std::vector<double>* b) {
+  const double w4 = std::pow(kRestMiddleW, 4.0);
+  ForEachRestCell(d, [&](size_t alpha, size_t far) {
+    (*b)[alpha] = std::max(0.0, ((*b)[alpha] / w4 - kRestMiddleW * (*b)[far]) / (1.0 - kRestMiddleW));
+  });
+}
+
+void RestAlphaOfConstantJerk(const TemporalDiscretization& d, std::vector<double>* b) {
+  ForEachRestCell(d, [&](size_t alpha, size_t far) { (*b)[alpha] = (*b)[far]; });
 }
 
 double LinearizationFloor(const std::vector<double>& linearization) {
@@ -826,28 +1028,34 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
     const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
     d.cell_edges[static_cast<size_t>(i)] =
-        CellEdges(K, rest_start ? RampLength(problem, i, false, rest_end) : 0.0,
-                  rest_end ? RampLength(problem, i, true, rest_start) : 0.0);
+        CellEdges(K, rest_start ? RestCellSize(problem, i, false, rest_end) : RestSize(),
+                  rest_end ? RestCellSize(problem, i, true, rest_start) : RestSize());
     for (int k = 0; k < K; ++k) {
       const double half = 0.5 * c.Len(i, k);
       d.cells[static_cast<size_t>(2 * (i * K + k))].ds = half;
       d.cells[static_cast<size_t>(2 * (i * K + k) + 1)].ds = half;
     }
   }
-  // Rest cells: their two half cells' times sum to the exact 3 ds / sqrt(b) (see the top).
+  // Rest cells take 6 L / (sqrt(alpha) + sqrt(b_far)): the half cell between alpha (the middle
+  // value) and b_far, of length L / 2, with weight 6; the one between the rest point and alpha with
+  // weight 0 (RestPolys).
   for (size_t cell = 0; cell < d.shapes.size(); ++cell) {
     if (d.shapes[cell] == CellShape::kQuadratic) continue;
-    d.cells[2 * cell].time_weight = kRestTimeWeight;
-    d.cells[2 * cell + 1].time_weight = kRestTimeWeight;
+    const bool start = d.shapes[cell] == CellShape::kRestStart;
+    d.cells[2 * cell].time_weight = start ? 0.0 : 6.0;
+    d.cells[2 * cell + 1].time_weight = start ? 6.0 : 0.0;
   }
 
   // ---- rows of every cell ----
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) {
+      RestPolys rest;
       if (d.shapes[static_cast<size_t>(i * K + k)] == CellShape::kQuadratic) {
-        AddQuadraticCellRows(c, i, k, jerk_rows, linearization);
+        AddCellRows(c, i, k, jerk_rows, linearization, nullptr);
+      } else if (RestCellPolys(c, i, k, &rest)) {
+        AddCellRows(c, i, k, jerk_rows, linearization, &rest);
       } else {
-        AddRestCellRows(c, i, k);
+        AddConstantJerkRestRows(c, i, k);
       }
     }
   }
@@ -884,7 +1092,7 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   AddBoundaryAcceleration(c, true);
   if (problem.prune_redundant_rows) internal::KeepTightestUpperBounds(&d);
   if (!d.infeasible_reason && d.num_vars > 0) {
-    d.controls = internal::BuildControlBasis(problem, d, c.boundary_sddot, c.boundary_b, kRestMiddle);
+    d.controls = internal::BuildControlBasis(problem, d, c.boundary_sddot, c.boundary_b);
   }
   return d;
 }

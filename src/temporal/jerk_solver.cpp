@@ -1,9 +1,9 @@
 // The jerk-limited temporal problem by sequential convex programming (TemporalSolver's
 // SolveJerkLimited, declared in temporal_solver.h; the discretization is jerk_discretization.cpp).
 //
-// 1. Solve the jerk-limited discretization without the jerk rows of regular cells: continuous
-//    sddot, velocity and acceleration limits, the exact jerk bounds of rest cells. Its T is a lower
-//    bound of the jerk-limited optimum on this grid; the solution is the first linearization point.
+// 1. Solve the jerk-limited discretization without its jerk rows: continuous sddot, velocity and
+//    acceleration limits. Its T is a lower bound of the jerk-limited optimum on this grid; the
+//    solution is the first linearization point.
 // 2. Repeat: linearize the jerk rows at the last solution (largest b per cell), solve. Every
 //    solution satisfies the true jerk limit (the linearized rows are conservative for any
 //    linearization point), so each one is a valid answer.
@@ -107,7 +107,8 @@ constexpr double kPredictedFraction = 0.5;
 // speed at the curve's ends (tangent and curvature vanish there) and hit the iteration limit.
 constexpr double kLooseBound = 1000.0;
 
-// Upper bounds of d's free values: the velocity limit at each one's own point. The certified
+// Upper bounds of d's free values: the velocity limit at each one's own point (a rest cell's
+// middle value: the jerk limit at its rest point). The certified
 // velocity rows imply them (they bound f'^2 b on whole cells, and b at a cell's middle point is
 // the profile's own), so the answer does not change; a working set needs them, since without the
 // rows it leaves out a value could grow without bound (shorter and shorter time). Only working
@@ -121,9 +122,21 @@ void BoundByPointVelocity(const TemporalProblem& problem, TemporalDiscretization
       const GridValue& v = d->grid[static_cast<size_t>(d->GridIndex(i, j))];
       if (v.var < 0) continue;
       const size_t k = static_cast<size_t>(std::min(j / 2, K - 1));
+      double& ub = d->var_upper[static_cast<size_t>(v.var)];
+      const CellShape shape = d->shapes[static_cast<size_t>(i * K) + k];
+      if (shape != CellShape::kQuadratic && j % 2 == 1) {
+        // A rest cell's middle value is q at its rest point, not b at a point: its bound is the
+        // jerk there, |f'_axis| (4 / 18) q^1.5 / L^2 <= j_axis (the other terms vanish at rest).
+        const double L = edges[k + 1] - edges[k];
+        const Eigen::Vector3d t = problem.curve.Evaluate(i, shape == CellShape::kRestStart ? edges[k] : edges[k + 1], 1);
+        for (int a = 0; a < 3; ++a) {
+          if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
+          ub = std::min(ub, std::pow(18.0 * L * L * (*problem.limits.max_jerk)(a) / (4.0 * std::abs(t(a))), 2.0 / 3.0) / v.scale);
+        }
+        continue;
+      }
       const double s = edges[k] + 0.5 * (j - 2 * static_cast<int>(k)) * (edges[k + 1] - edges[k]);
       const Eigen::Vector3d t = problem.curve.Evaluate(i, s, 1);
-      double& ub = d->var_upper[static_cast<size_t>(v.var)];
       if (problem.limits.max_speed && t.norm() > problem.zero_tangent_tolerance) {
         ub = std::min(ub, *problem.limits.max_speed * *problem.limits.max_speed / (t.squaredNorm() * v.scale));
       }
@@ -191,18 +204,25 @@ int GrowWorkingSet(const std::vector<LinearRow>& rows, const std::vector<double>
 
 // The coefficients of the linearized jerk rows over their cell's three half-grid values at a
 // linearization (b at every half-grid value): |P| + j b / (2 bbar^1.5) <= 3 j / (2 sqrt(bbar))
-// divided by its bound, bbar the cell's LinearizationPoint. A cell's templates are consecutive, so
-// bbar is found once per cell.
+// divided by its bound, bbar the cell's LinearizationPoint (a rest cell's: per part). A cell's (or
+// part's) templates are consecutive, so bbar is found once per cell or part.
 class JerkCoefficients {
  public:
   explicit JerkCoefficients(const std::vector<double>& linearization)
       : linearization_(linearization), floor_(internal::LinearizationFloor(linearization)) {}
   std::array<double, 3> operator()(const internal::JerkRowTemplate& t) {
-    if (t.g0 != g0_) {
+    if (t.g0 != g0_ || t.w0 != w0_) {
       g0_ = t.g0;
+      w0_ = t.w0;
       const size_t g = static_cast<size_t>(t.g0);
       const double lb[3] = {linearization_[g], linearization_[g + 1], linearization_[g + 2]};
-      const double bbar = internal::LinearizationPoint(lb, floor_);
+      double bbar = 0.0;
+      if (t.rest_far < 0) {
+        bbar = internal::LinearizationPoint(lb, floor_);
+      } else {
+        const double alpha = lb[1], far = lb[t.rest_far];
+        bbar = std::max({alpha + (far - alpha) * t.w0, alpha + (far - alpha) * t.w1, floor_});
+      }
       root_ = 2.0 * std::sqrt(bbar) / 3.0;
       cb_ = 1.0 / (3.0 * bbar);
     }
@@ -214,6 +234,7 @@ class JerkCoefficients {
   const std::vector<double>& linearization_;
   double floor_;
   int g0_ = -1;
+  double w0_ = 0.0;
   double root_ = 0.0, cb_ = 0.0;
 };
 
@@ -257,7 +278,8 @@ std::vector<double> GridValues(const TemporalDiscretization& d, const std::vecto
 
 // The profile of b at every half-grid value of the jerk-limited d (std::invalid_argument for
 // values that make none).
-TemporalProfile ProfileOf(const TemporalDiscretization& d, const std::vector<double>& b) {
+TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b) {
+  internal::RestAlphaToMiddles(d, &b);
   const int half = d.cells_per_piece, full = half / 2;
   std::vector<std::vector<double>> piece_b(static_cast<size_t>(d.num_pieces));
   std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(d.num_pieces));
@@ -565,6 +587,14 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
         x[static_cast<size_t>(g.var)] = b / g.scale;
       }
     }
+    // Rest cells hold q at their rest point in the middle: that of a constant s-jerk, q = b at the
+    // far end (the jerk-free profile's b ~ s near rest would make it about twice that, a first
+    // linearization far too cautious: on the units test's quintic 4 convex solves, not 3).
+    std::vector<double> grid_b = GridValues(d, x);
+    internal::RestAlphaOfConstantJerk(d, &grid_b);
+    for (size_t g = 0; g < d.grid.size(); ++g) {
+      if (d.grid[g].var >= 0) x[static_cast<size_t>(d.grid[g].var)] = grid_b[g] / d.grid[g].scale;
+    }
     return x;
   };
 
@@ -784,6 +814,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
           b[static_cast<size_t>(d.GridIndex(i, j))] = value;
         }
       }
+      internal::RestMiddlesToAlpha(d, &b);
       return b;
     };
     if (d.controls && !d.infeasible_reason && d.num_vars > 0) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "timeopt/core/enum_strings.h"
+#include "discretization_internal.h"
 #include "infeasibility.h"
 #include "solver_internal.h"
 #include "timeopt/core/option_check.h"
@@ -308,6 +309,13 @@ void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretiz
     }
   }
   if (d.jerk_limited) {
+    // A rest cell's middle value is q at its rest point in d, b at its middle in the profile.
+    std::vector<double> flat(d.grid.size());
+    for (size_t g = 0; g < d.grid.size(); ++g) flat[g] = std::max(0.0, d.GridB(static_cast<int>(g), x));
+    RestAlphaToMiddles(d, &flat);
+    for (int i = 0; i < d.num_pieces; ++i) {
+      for (int k = 0; k <= K; ++k) b[i][k] = flat[static_cast<size_t>(d.GridIndex(i, k))];
+    }
     const int full = K / 2;
     std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(d.num_pieces));
     for (int i = 0; i < d.num_pieces; ++i) {

@@ -29,9 +29,6 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// b at the middle of a rest cell, b_far (1/2)^(4/3): the value the (sigma / ds)^(4/3) shape implies.
-const double kRestMiddleRatio = std::pow(2.0, -4.0 / 3.0);
-
 // The time integral of 1 / sqrt(b) over an interval of length L on which b = b_lo + slope_lo x +
 // c2 x^2 rises, its slope b' going from slope_lo >= 0 to slope_hi >= 0 (b_hi >= b_lo). Infinite
 // when b_lo = 0 and slope_lo = 0 (b ~ c2 x^2 near x = 0, a log singularity).
@@ -163,20 +160,49 @@ struct QuadraticCell {
   }
 };
 
-// Rest cells: the fraction u = tau / t1 of the cell's time t1 = 3 ds / sqrt(b_far) that has passed
-// (rest start) or is left (rest end) at sigma, u^3 = sigma / ds resp. (ds - sigma) / ds.
-double RestDuration(double ds, double b_far) { return 3.0 * ds / std::sqrt(b_far); }
-
-// The state of a rest cell from u (as above), with J = 6 ds / t1^3: sdot = J (u t1)^2 / 2 =
-// sqrt(b_far) u^2, sddot = +-J u t1, sdddot = J (positive in both: the rest-end cell brakes less
-// and less).
-void RestState(CellShape shape, double ds, double b_far, double u, TemporalProfile::Point* p) {
-  const double t1 = RestDuration(ds, b_far);
-  const double jerk = 6.0 * ds / (t1 * t1 * t1);
-  p->sdot = std::sqrt(b_far) * u * u;
-  p->sddot = (shape == CellShape::kRestStart ? 1.0 : -1.0) * jerk * u * t1;
-  p->sdddot = jerk;
-}
+// A rest cell of length L (see the header): with w in [0, 1] the fraction of the cell's time
+// from its rest point, s - s_rest = +-L w^3 and b = w^4 q(w) with q = alpha + beta w linear, so that
+// w has a constant second derivative: w' = sqrt(q) / (3 L). alpha and beta follow from b at the
+// cell's middle in s (w^3 = 1/2) and at its far end: q(2^(-1/3)) = 2^(4/3) b_mid, q(1) = b_far.
+// beta = 0 is a constant s-jerk; alpha = q at the rest point may be 0 (the cell starts with zero
+// s-jerk).
+struct RestCell {
+  double alpha = 0.0, beta = 0.0, L = 0.0;
+  static constexpr double kMiddleW = 0.7937005259840998;  // 2^(-1/3)
+  RestCell(double b_mid, double b_far, double length) : L(length) {
+    const double q_mid = b_mid / (kMiddleW * kMiddleW * kMiddleW * kMiddleW);
+    beta = (b_far - q_mid) / (1.0 - kMiddleW);
+    alpha = b_far - beta;
+    // Rounding of an alpha = 0 cell (relative to b_far) is not a negative alpha.
+    if (alpha < 0.0 && alpha > -1e-12 * b_far) alpha = 0.0;
+  }
+  double Q(double w) const { return std::max(0.0, alpha + beta * w); }
+  // Time from the rest point to w: 3 L times the integral of 1 / sqrt(q), in a form free of
+  // cancellation as beta -> 0.
+  double TimeTo(double w) const { return 6.0 * L * w / (std::sqrt(Q(w)) + std::sqrt(alpha)); }
+  // Time between w and the far end (w = 1).
+  double TimeFrom(double w, double one_minus_w) const {
+    return 6.0 * L * one_minus_w / (std::sqrt(Q(1.0)) + std::sqrt(Q(w)));
+  }
+  double Duration() const { return TimeTo(1.0); }
+  // w reached a time tau after the rest point: sqrt(q) = sqrt(alpha) + beta tau / (6 L).
+  double WAfter(double tau) const {
+    return std::clamp(tau * (2.0 * std::sqrt(alpha) + beta * tau / (6.0 * L)) / (6.0 * L), 0.0, 1.0);
+  }
+  // 1 - w a time tau after the far end (towards the rest point), for a rest-end cell.
+  double OneMinusWAfterFar(double tau) const {
+    const double t1 = Duration();
+    return std::clamp(tau * (2.0 * std::sqrt(alpha) + beta * (2.0 * t1 - tau) / (6.0 * L)) / (6.0 * L), 0.0, 1.0);
+  }
+  // The state at w: sdot = w^2 sqrt(q), sddot = +-w (4 alpha + 5 beta w) / (6 L) (braking towards a
+  // rest end), sdddot = (4 alpha + 10 beta w) sqrt(q) / (18 L^2) (the same sign for both ends).
+  void State(bool start, double w, TemporalProfile::Point* p) const {
+    const double root = std::sqrt(Q(w));
+    p->sdot = w * w * root;
+    p->sddot = (start ? 1.0 : -1.0) * w * (4.0 * alpha + 5.0 * beta * w) / (6.0 * L);
+    p->sdddot = (4.0 * alpha + 10.0 * beta * w) * root / (18.0 * L * L);
+  }
+};
 
 std::string CellName(size_t piece, int k) {
   return "cell " + std::to_string(k) + " of piece " + std::to_string(piece);
@@ -298,23 +324,23 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
                                       " is linear; a jerk-limited profile takes quadratic and "
                                       "rest cells");
         case CellShape::kRestStart:
-          if (b0 != 0.0 || !(b1 > 0.0)) {
+        case CellShape::kRestEnd: {
+          const bool start = shapes[i][k] == CellShape::kRestStart;
+          const double b_rest = start ? b0 : b1, b_far = start ? b1 : b0;
+          if (b_rest != 0.0 || !(b_far > 0.0)) {
             throw std::invalid_argument(where + CellName(i, k) +
-                                        " starts at rest: expected b = 0 at its start and b > 0 "
-                                        "at its end");
+                                        (start ? " starts at rest: expected b = 0 at its start and b > 0 at its end"
+                                               : " ends at rest: expected b > 0 at its start and b = 0 at its end"));
           }
-          h[2 * k + 1] = kRestMiddleRatio * b1;
-          duration = RestDuration(ds, b1);
-          break;
-        case CellShape::kRestEnd:
-          if (b1 != 0.0 || !(b0 > 0.0)) {
-            throw std::invalid_argument(where + CellName(i, k) +
-                                        " ends at rest: expected b > 0 at its start and b = 0 at "
-                                        "its end");
+          const RestCell cell(h[2 * k + 1], b_far, ds);
+          if (!(cell.alpha >= 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) + (start ? " starts" : " ends") +
+                                        " at rest: b in its middle must be at least 2^(-5/3) times b at its far "
+                                        "end (q at the rest point >= 0)");
           }
-          h[2 * k + 1] = kRestMiddleRatio * b0;
-          duration = RestDuration(ds, b0);
+          duration = cell.Duration();
           break;
+        }
         case CellShape::kQuadratic: {
           const QuadraticCell cell(b0, h[2 * k + 1], b1, ds);
           if (cell.VertexValue() < 0.0) {
@@ -405,11 +431,13 @@ double TemporalProfile::TimeInCell(int piece, int k, double sigma) const {
                            half_b_[piece][2 * k + 2], ds)
           .Time(sigma);
     case CellShape::kRestStart:
-      return RestDuration(ds, b_[piece][k + 1]) * std::cbrt(std::min(sigma / ds, 1.0));
-    case CellShape::kRestEnd:
-      // t1 (1 - (1 - sigma / ds)^(1/3)) without cancellation for small sigma.
-      return -RestDuration(ds, b_[piece][k]) *
-             std::expm1(std::log1p(-std::min(sigma / ds, 1.0)) / 3.0);
+      return RestCell(half_b_[piece][2 * k + 1], b_[piece][k + 1], ds).TimeTo(std::cbrt(std::min(sigma / ds, 1.0)));
+    case CellShape::kRestEnd: {
+      // 1 - w with w^3 = 1 - sigma / ds, without cancellation for small sigma.
+      const double x = std::min(sigma / ds, 1.0);
+      const double one_minus_w = -std::expm1(std::log1p(-x) / 3.0);
+      return RestCell(half_b_[piece][2 * k + 1], b_[piece][k], ds).TimeFrom(1.0 - one_minus_w, one_minus_w);
+    }
   }
   return 0.0;
 }
@@ -434,10 +462,10 @@ TemporalProfile::Point TemporalProfile::StateInCell(int piece, int k, double sig
       break;
     }
     case CellShape::kRestStart:
-      RestState(CellShape::kRestStart, ds, b_[piece][k + 1], std::cbrt(sigma / ds), &p);
+      RestCell(half_b_[piece][2 * k + 1], b_[piece][k + 1], ds).State(true, std::cbrt(sigma / ds), &p);
       break;
     case CellShape::kRestEnd:
-      RestState(CellShape::kRestEnd, ds, b_[piece][k], std::cbrt((ds - sigma) / ds), &p);
+      RestCell(half_b_[piece][2 * k + 1], b_[piece][k], ds).State(false, std::cbrt((ds - sigma) / ds), &p);
       break;
   }
   return p;
@@ -493,20 +521,20 @@ TemporalProfile::Point TemporalProfile::AtTime(double t) const {
       return StateInCell(piece, k, q.Sigma(tau, q.Time(ds)));
     }
     case CellShape::kRestStart: {
-      // sigma = ds u^3 with u = tau / t1: the closed form in time.
-      const double t1 = RestDuration(ds, b_[piece][k + 1]);
-      const double u = std::min(tau / t1, 1.0);
-      p = StateInCell(piece, k, ds * u * u * u);
-      RestState(CellShape::kRestStart, ds, b_[piece][k + 1], u, &p);
+      // sigma = ds w^3 with w from tau in closed form.
+      const RestCell cell(half_b_[piece][2 * k + 1], b_[piece][k + 1], ds);
+      const double w = cell.WAfter(tau);
+      p = StateInCell(piece, k, ds * w * w * w);
+      cell.State(true, w, &p);
       return p;
     }
     case CellShape::kRestEnd: {
-      // u = (t1 - tau) / t1 is the fraction of time left; ds - sigma = ds u^3, so sigma =
-      // ds (1 - u^3) = ds (tau / t1) (1 + u + u^2), free of cancellation near the start.
-      const double t1 = RestDuration(ds, b_[piece][k]);
-      const double passed = std::min(tau / t1, 1.0), u = 1.0 - passed;
-      p = StateInCell(piece, k, ds * passed * (1.0 + u + u * u));
-      RestState(CellShape::kRestEnd, ds, b_[piece][k], u, &p);
+      // w is the fraction of the cell's time left; ds - sigma = ds w^3, so sigma =
+      // ds (1 - w) (1 + w + w^2), free of cancellation near the start.
+      const RestCell cell(half_b_[piece][2 * k + 1], b_[piece][k], ds);
+      const double one_minus_w = cell.OneMinusWAfterFar(tau), w = 1.0 - one_minus_w;
+      p = StateInCell(piece, k, ds * one_minus_w * (1.0 + w + w * w));
+      cell.State(false, w, &p);
       return p;
     }
   }

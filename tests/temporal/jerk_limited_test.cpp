@@ -210,6 +210,29 @@ TEST(JerkLimited, BothBackendsAgreeAndTheExactRowsAreNotAbove) {
   }
 }
 
+// A rest cell's polynomials in its time fraction have 6 deg f' + 6 coefficients; pieces of degree
+// above 10 keep a rest cell of constant s-jerk instead (AddConstantJerkRestRows), which the
+// structured path has no basis for. Such a piece (degree 12: a cubic with small higher terms) must
+// still be solved, flown within its limits, and agree with the exact rows as above.
+TEST(JerkLimited, PiecesOfHighDegreeKeepAConstantJerkRestCell) {
+  PolynomialPiece::Coefficients c = PolynomialPiece::Coefficients::Zero(3, 13);
+  c.col(1) << 3.0, 1.0, 0.2;
+  c.col(2) << 1.0, 2.0, 0.0;
+  c.col(3) << -0.5, -1.0, 0.1;
+  for (int j = 4; j < 13; ++j) c.col(j) << 0.01 / j, -0.02 / j, 0.005;
+  TemporalProblem p = test_support::WalkProblem(PiecewiseCurve({PolynomialPiece(c)}), 30);
+  p.limits.max_jerk = Eigen::Vector3d(6.0, 6.0, 4.0);
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_TRUE(socp.is_success()) << socp.message;
+  ASSERT_TRUE(ipopt.is_success()) << ipopt.message;
+  EXPECT_EQ(socp.method, "conic");
+  EXPECT_LE(socp.max_jerk_ratio, 1.0 + 1e-6);
+  EXPECT_LE(socp.max_acceleration_ratio, 1.0 + 1e-6);
+  EXPECT_NEAR(socp.total_time, ipopt.total_time, 2e-3 * socp.total_time);
+  EXPECT_LE(ipopt.total_time, socp.total_time * (1.0 + 1e-6));
+}
+
 // From 36 cells per piece the structured path starts from the programme solved once on a third of
 // the cells (docs/temporal.md), and its first solve then takes only the rows near their bound
 // there. Its answers must stand against the exact rows as the jerk-free start's do (the test

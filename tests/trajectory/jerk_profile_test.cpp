@@ -80,10 +80,12 @@ TemporalProfile OnePiece(const std::vector<double>& half, const std::vector<Cell
 // + gamma (s - ds)^2 with alpha = 4 / (3 ds) (the slope b' = 2 sddot that the rest-start cell ends
 // with, sddot = b / (1.5 ds)) and gamma = -2 / (3 ds^2), the value for which q'(3 ds) =
 // -4 q(3 ds) / (3 ds), the slope the rest-end cell starts with. So sddot is continuous everywhere:
-// q = 1, 1.5, 5/3, 1.5, 1 at s = 1/4 .. 3/4. The rest cells' middle values (0.0 here) are
-// replaced by the constructor.
+// q = 1, 1.5, 5/3, 1.5, 1 at s = 1/4 .. 3/4. The rest cells' middle values are those of a
+// constant s-jerk, 2^(-4/3) times their far ends.
+const double kConstantJerkMiddle = std::pow(2.0, -4.0 / 3.0);
 TemporalProfile SmoothRestToRest() {
-  const std::vector<double> half = {0.0, 0.0, 1.0, 1.5, 5.0 / 3.0, 1.5, 1.0, 0.0, 0.0};
+  const double m = kConstantJerkMiddle;
+  const std::vector<double> half = {0.0, m, 1.0, 1.5, 5.0 / 3.0, 1.5, 1.0, m, 0.0};
   const std::vector<CellShape> shapes = {CellShape::kRestStart, CellShape::kQuadratic,
                                          CellShape::kQuadratic, CellShape::kRestEnd};
   return TemporalProfile::JerkLimited(Grid{half, half}, Shapes{shapes, shapes});
@@ -121,7 +123,8 @@ TEST(JerkProfile, QuadraticCellTimesMatchQuadrature) {
 TEST(JerkProfile, RestCellTimesMatchClosedFormAndQuadrature) {
   const double ds = 0.5;  // K = 2 cells
   for (double b_far : {1e-4, 0.3, 1.0, 7.5}) {
-    const TemporalProfile profile = OnePiece({0.0, 0.0, b_far, 0.0, 0.0},
+    const double m = kConstantJerkMiddle * b_far;
+    const TemporalProfile profile = OnePiece({0.0, m, b_far, m, 0.0},
                                              {CellShape::kRestStart, CellShape::kRestEnd});
     // b = b_far (sigma / ds)^(4/3): 1 / sqrt(b) ~ sigma^(-2/3) at the start, within tanh-sinh's
     // reach. Written with the distance to the singular end for the rest-end mirror.
@@ -133,17 +136,44 @@ TEST(JerkProfile, RestCellTimesMatchClosedFormAndQuadrature) {
     EXPECT_NEAR(profile.total_time(), 2.0 * closed, 8 * kEps * closed) << b_far;
     // The quadrature of a x^(-2/3) singularity converges more slowly: 1e-13 relative.
     EXPECT_NEAR(profile.TimeAt(0, 1), quadrature, 1e-13 * closed) << b_far;
-    // The middle value is the one the shape implies.
-    EXPECT_NEAR(profile.half_b(0, 1), std::pow(0.5, 4.0 / 3.0) * b_far, 4 * kEps * b_far);
     EXPECT_EQ(profile.shape(0, 0), CellShape::kRestStart);
     EXPECT_EQ(profile.shape(0, 1), CellShape::kRestEnd);
   }
 }
 
-// A mixed profile of every jerk-limited shape over two pieces (b0 = 0 quadratic start included).
+TEST(JerkProfile, RestCellsWhoseSJerkChangesMatchQuadrature) {
+  // b = w^4 (alpha + beta w) with sigma = ds w^3: the middle value bm (w^3 = 1/2) over b_far from
+  // the smallest allowed, 2^(-5/3) (alpha = 0), through a constant s-jerk (2^(-4/3)) to a
+  // decreasing s-jerk (larger bm). The time is the integral of 1 / sqrt(b) over sigma, here by
+  // quadrature in w: dsigma = 3 ds w^2 dw, so 1 / sqrt(b) dsigma = 3 ds dw / sqrt(alpha + beta w).
+  const double ds = 0.5, b_far = 2.0;
+  for (double ratio : {std::pow(2.0, -5.0 / 3.0), 0.33, kConstantJerkMiddle, 0.5, 0.9}) {
+    const double bm = ratio * b_far;
+    const TemporalProfile profile = OnePiece({0.0, bm, b_far, bm, 0.0}, {CellShape::kRestStart, CellShape::kRestEnd});
+    const double w_mid = std::cbrt(0.5);
+    const double beta = (b_far - bm / std::pow(w_mid, 4)) / (1.0 - w_mid);
+    const double alpha = std::max(0.0, b_far - beta);  // 2^(-5/3): 0 within rounding, as the profile takes it
+    // alpha = 0 makes 1 / sqrt(q) ~ w^(-1/2) at w = 0, within tanh-sinh's reach.
+    const auto integrand = [&](double w, double) { return 3.0 * ds / std::sqrt(std::max(alpha + beta * w, 1e-300)); };
+    const double quadrature = TanhSinh(integrand, 1.0, 1.0 / 128);
+    // The closed form 6 ds / (sqrt(alpha) + sqrt(b_far)) against a sum of ~1000 positive terms:
+    // 1e-13 relative (the alpha = 0 case converges like the singular one above).
+    EXPECT_NEAR(profile.TimeAt(0, 1), quadrature, 1e-13 * quadrature) << ratio;
+    EXPECT_NEAR(profile.total_time(), 2.0 * quadrature, 2e-13 * quadrature) << ratio;
+    // The middle value is kept, and b at the middle in s is it.
+    EXPECT_EQ(profile.half_b(0, 1), bm);
+    EXPECT_NEAR(std::pow(profile.AtS(0, 0.25).sdot, 2), bm, 1e-13 * b_far) << ratio;
+  }
+  // Below 2^(-5/3) the cell would need q < 0 at rest.
+  EXPECT_THROW(OnePiece({0.0, 0.3 * b_far, b_far, 0.3 * b_far, 0.0}, {CellShape::kRestStart, CellShape::kRestEnd}),
+               std::invalid_argument);
+}
+
+// A mixed profile of every jerk-limited shape over two pieces (b0 = 0 quadratic start included;
+// the rest start's s-jerk grows through its cell, the rest end's eases off).
 TemporalProfile Mixed() {
   return TemporalProfile::JerkLimited(
-      Grid{{0.0, 0.0, 0.8, 1.5, 2.0, 0.5, 1.5, 1.1, 0.0}, {0.0, 0.3, 1.0, 0.2, 0.05, 0.5, 2.0, 0.0, 0.0}},
+      Grid{{0.0, 0.3, 0.8, 1.5, 2.0, 0.5, 1.5, 1.1, 0.0}, {0.0, 0.3, 1.0, 0.2, 0.05, 0.5, 2.0, 0.9, 0.0}},
       Shapes{{CellShape::kRestStart, CellShape::kQuadratic, CellShape::kQuadratic,
               CellShape::kQuadratic},
              {CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic,

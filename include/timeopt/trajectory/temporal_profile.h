@@ -12,13 +12,17 @@
 //   at sigma = 0, ds / 2, ds, so c2 = 2 (b0 - 2 bm + b1) / ds^2, c1 = (-3 b0 + 4 bm - b1) / ds, and
 //   sdot = sqrt(b), sddot = b' / 2 = (c1 + 2 c2 sigma) / 2 (linear in s, continuous across cells
 //   when the neighbours' slopes of b agree), sdddot = d(sddot)/dt = c2 sdot.
-// - kRestStart: from rest (sdot = sddot = 0) with a constant s-jerk J > 0: sigma = J tau^3 / 6,
-//   sdot = J tau^2 / 2, sddot = J tau, sdddot = J. In s, b = b1 (sigma / ds)^(4/3); the cell takes
-//   t1 = 3 ds / sqrt(b1), J = 6 ds / t1^3, and ends with sddot = b1 / (1.5 ds).
-// - kRestEnd: the time mirror, arriving at rest: with r = t1 - tau the time left, ds - sigma =
-//   J r^3 / 6, sdot = J r^2 / 2, sddot = -J r (braking, 0 at the end), sdddot = +J (the braking
-//   eases off); b = b0 ((ds - sigma) / ds)^(4/3), t1 = 3 ds / sqrt(b0), starts with sddot =
-//   -b0 / (1.5 ds).
+// - kRestStart: from rest (sdot = sddot = 0). With w in [0, 1] the fraction of the cell's time
+//   that has passed, sigma = ds w^3 and b = w^4 q(w), q = alpha + beta w linear in w, so that w
+//   has a constant second derivative (w' = sqrt(q) / (3 ds)): sdot = w^2 sqrt(q), sddot = w (4 alpha
+//   + 5 beta w) / (6 ds), sdddot = (4 alpha + 10 beta w) sqrt(q) / (18 ds^2). q(1) = b1 (b at the
+//   far end) and q(2^(-1/3)) = 2^(4/3) bm (b at the middle in s) give alpha and beta; the cell
+//   takes t1 = 6 ds / (sqrt(alpha) + sqrt(b1)). beta = 0 (bm = 2^(-4/3) b1) is a constant s-jerk
+//   J = 2 b1^1.5 / (9 ds^2) from rest, b = b1 (sigma / ds)^(4/3); beta < 0 lets the s-jerk ease off
+//   through the cell, as a curved start needs.
+// - kRestEnd: the time mirror, arriving at rest: w is the fraction of the cell's time left,
+//   ds - sigma = ds w^3, b = w^4 q(w) with q(1) = b0, sddot = -w (4 alpha + 5 beta w) / (6 ds)
+//   (braking, 0 at the end), sdddot as above (positive where the braking eases off).
 //
 // Cell times are closed forms of the integral of 1 / sqrt(b) (see temporal_profile.cpp for the
 // forms free of cancellation); AtTime inverts them exactly (closed form for linear and rest cells,
@@ -63,8 +67,8 @@ class TemporalProfile {
   // A quadratic cell must have b > 0 inside and a finite time (b reaching 0 at an end with zero
   // slope there, e.g. b0 = 0 and c1 = 0, takes forever; b = 0 at both ends with bm > 0 is finite
   // and allowed). A rest-start cell needs b = 0 at its start and b > 0 at its end, a rest-end cell
-  // the reverse. The middle value of a rest cell is not free: it is replaced by the value its shape
-  // implies, 2^(-4/3) times the far-end value. Throws std::invalid_argument naming piece and cell.
+  // the reverse, and its middle value at least 2^(-5/3) times its far-end value (alpha >= 0 above;
+  // 2^(-4/3) times it is a constant s-jerk). Throws std::invalid_argument naming piece and cell.
   // cell_edges (optional): the K + 1 edges of every piece's cells in s, increasing from 0 to 1, for
   // a grid graded towards rest points; the half points are then the cells' middles. Empty: K equal
   // cells of ds = 1 / K.
