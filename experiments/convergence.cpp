@@ -16,8 +16,11 @@
 // the median flight time and the median cost reduction at each budget of kBudgetsMs),
 // convergence.png (normalized cost against time on a logarithmic axis, median and quartiles),
 // convergence_budgets.png (cost reduction against the budget), convergence_density.png (cost
-// reduction at --budget-ms, clearance, smoothness and flight time against density). The paper's
-// names and colours: with decoupling red, without blue. Tests run in parallel on all cores, each timed on its own thread; progress on stderr.
+// reduction at --budget-ms, clearance, smoothness and flight time against density),
+// convergence_topview_decoupled.png and convergence_topview_coupled.png (the paper's Fig. 4(a)/(b):
+// both trajectories of one test over its forest, coloured by speed on one scale; the first test at
+// the second density, or the only one, that both formulations plan). The paper's names and
+// colours: with decoupling red, without blue. Tests run in parallel on all cores, each timed on its own thread; progress on stderr.
 // Usage: experiment_convergence --out DIR [--tests N] [--budget-ms MS] [--densities D ...]
 
 #include <algorithm>
@@ -42,6 +45,7 @@
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/trajectory/trajectory.h"
+#include "timeopt/viz/plan_plot.h"
 #include "timeopt/viz/plot.h"
 
 namespace {
@@ -90,14 +94,18 @@ double NormalizedCostAt(const std::vector<SpatialIteration>& its, double ms) {
   return c / its.front().cost;
 }
 
-Run PlanOnce(Planner& planner, const Eigen::Vector3d& start, const Eigen::Vector3d& goal, SpatialFormulation f) {
+PlannerOptions OptionsFor(SpatialFormulation f) {
   PlannerOptions options;
   options.spatial.formulation = f;
   // The same budget for both: the iteration limit (100). No wall-clock limit, so that a run is
   // deterministic whatever the machine's load (the forest plans converge in 10-40 iterations).
   options.spatial.max_solver_time_in_seconds = 10.0;
+  return options;
+}
+
+Run PlanOnce(Planner& planner, const Eigen::Vector3d& start, const Eigen::Vector3d& goal, SpatialFormulation f) {
   // Both curves timed by the planner's temporal stage (jerk-limited, the same limits).
-  const PlanResult plan = planner.Plan(start, goal, options);
+  const PlanResult plan = planner.Plan(start, goal, OptionsFor(f));
   Run run;
   run.iterations = plan.spatial.iterations;
   run.success = plan.is_success();
@@ -174,6 +182,31 @@ int main(int argc, char** argv) {
     for (unsigned k = 0; k < std::min<unsigned>(threads, static_cast<unsigned>(tests)); ++k) pool.emplace_back(worker);
     for (std::thread& th : pool) th.join();
     all.insert(all.end(), results.begin(), results.end());
+    // Fig. 4(a)/(b): the first test that both plan, planned again (deterministic) for its curves.
+    if (di == std::min<size_t>(1, densities.size() - 1)) {
+      for (const Test& t : results) {
+        if (!t.runs[0].success || !t.runs[1].success) continue;
+        Planner planner(esdf);
+        std::vector<Trajectory> trajectories;
+        double top_speed = 0.0;
+        for (int f = 0; f < 2; ++f) {
+          const PlanResult plan = planner.Plan(pairs[static_cast<size_t>(t.index)].first,
+                                               pairs[static_cast<size_t>(t.index)].second, OptionsFor(kFormulations[f]));
+          trajectories.emplace_back(plan.curve, plan.temporal.profile);
+          for (const TrajectoryState& s : trajectories.back().Sample(100.0)) top_speed = std::max(top_speed, s.velocity.norm());
+        }
+        for (int f = 0; f < 2; ++f) {
+          PlanImageOptions image;
+          image.speed_scale = top_speed;
+          image.slice_height = pairs[static_cast<size_t>(t.index)].first.z();  // the same slice for both
+          std::ostringstream title;
+          title << kFormulationLabels[f] << " (density " << densities[di] << ", test " << t.index << ")";
+          image.title = title.str();
+          WritePlanPng(esdf, trajectories[f], out + "/convergence_topview_" + kFormulationNames[f] + ".png", image);
+        }
+        break;
+      }
+    }
   }
 
   std::ofstream csv(out + "/convergence.csv");

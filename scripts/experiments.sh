@@ -63,7 +63,7 @@ fi
 
 # ---- every expected file is there and parses ----
 csvs="allocation k_sweep rho_sweep solve_times certified_vs_paper tracking_vs_lambda convergence convergence_summary flight_loops"
-pngs="allocation k_sweep rho_sweep solve_times convergence convergence_budgets convergence_density flight_loops flight_paths tracking_vs_lambda"
+pngs="allocation k_sweep rho_sweep solve_times convergence convergence_budgets convergence_density convergence_topview_decoupled convergence_topview_coupled flight_loops flight_paths tracking_vs_lambda"
 if [ "$forest" = 1 ]; then csvs="$csvs planner_forest planner_forest_iterations"; pngs="$pngs planner_forest_iterations"; fi
 status=0
 for c in $csvs; do
@@ -122,6 +122,10 @@ last_density=$(echo $densities | awk '{print $NF}')
   echo "![cost reduction against the budget](convergence_budgets.png)"
   echo
   echo "![convergence against density](convergence_density.png)"
+  echo
+  echo "Both trajectories of one test over its forest, coloured by speed on one scale (the paper's Fig. 4(a)/(b)):"
+  echo
+  echo "![with decoupling](convergence_topview_decoupled.png) ![without decoupling](convergence_topview_coupled.png)"
   echo
   echo "Cost / initial cost against solver time, $tests tests per density ([convergence.csv](convergence.csv), [convergence_summary.csv](convergence_summary.csv))."
   echo "Median cost reduction at 0.5 ms: density $first_density decoupled $(summary "$first_density" decoupled 13), coupled $(summary "$first_density" coupled 13);"

@@ -31,6 +31,9 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
   if (!(options.sample_rate_hz > 0.0) || !std::isfinite(options.sample_rate_hz)) {
     throw std::invalid_argument("sample_rate_hz must be a positive number");
   }
+  if (!std::isnan(options.speed_scale) && !(options.speed_scale > 0.0 && std::isfinite(options.speed_scale))) {
+    throw std::invalid_argument("speed_scale must be a positive number (or NaN: the trajectory's top speed)");
+  }
   const std::vector<TrajectoryState> samples = trajectory.Sample(options.sample_rate_hz);
   double height = options.slice_height;
   if (std::isnan(height)) {
@@ -58,12 +61,13 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
 
   double vmax = 0.0;
   for (const TrajectoryState& s : samples) vmax = std::max(vmax, s.velocity.norm());
+  if (!std::isnan(options.speed_scale)) vmax = options.speed_scale;
   const double vscale = vmax > 0.0 ? vmax : 1.0;
   cairo_set_line_width(c, std::max(2.0, 0.6 * ppv));
   cairo_set_line_cap(c, CAIRO_LINE_CAP_ROUND);
   for (size_t k = 1; k < samples.size(); ++k) {
     const double speed = 0.5 * (samples[k - 1].velocity.norm() + samples[k].velocity.norm());
-    const auto rgb = SpeedColour(speed / vscale);
+    const auto rgb = SpeedColour(std::min(speed / vscale, 1.0));
     cairo_set_source_rgb(c, rgb[0], rgb[1], rgb[2]);
     cairo_move_to(c, px(samples[k - 1].position), py(samples[k - 1].position));
     cairo_line_to(c, px(samples[k].position), py(samples[k].position));
@@ -82,7 +86,8 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
                 "speed along the trajectory (T = %.2f s); green: start, purple: goal\n"
                 "map slice at z = %.2f m: black obstacle; grey to white: distance to it, 0 to 2 m",
                 trajectory.duration(), height);
-  image.DrawColourBar(SpeedColour, "0 m/s", internal::FormatValue(vmax, "m/s"), caption);
+  const std::string text = options.title.empty() ? std::string(caption) : options.title + ": " + caption;
+  image.DrawColourBar(SpeedColour, "0 m/s", internal::FormatValue(vmax, "m/s"), text);
   image.WritePng(path);
 }
 

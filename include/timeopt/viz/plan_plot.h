@@ -18,6 +18,11 @@ struct PlanImageOptions {
   int pixels_per_voxel = 4;   // image pixels per voxel edge (lowered for wide maps)
   int max_image_size = 1600;  // largest width or height of the map part, pixels
   double sample_rate_hz = 100.0;  // trajectory samples drawn per second of flight
+  // The speed at the red end of the colour scale, m/s; NaN (default): the trajectory's own top
+  // speed. Set it to compare pictures of several trajectories on one scale.
+  double speed_scale = std::numeric_limits<double>::quiet_NaN();
+  // Put before the caption (empty: nothing), e.g. which trajectory this is.
+  std::string title;
 };
 
 // Throws std::invalid_argument for a slice height outside the ESDF's box or bad options,
