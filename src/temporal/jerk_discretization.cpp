@@ -151,6 +151,32 @@ struct JerkContext {
   }
 };
 
+// Derivative `order` of piece i on rest cell k as a polynomial in the cell's time fraction w from
+// its rest point (see RestPolys): the cell's polynomial in u, with u = w^3 at a start and
+// u = 1 - w^3 at an end.
+SmallPoly InRestTime(const JerkContext& c, int piece, int k, int order, int axis) {
+  const SmallPoly on_cell = c.OnCell(piece, k, order, axis);
+  const SmallPoly from_rest =
+      c.d.shapes[static_cast<size_t>(piece * c.K + k)] == CellShape::kRestStart ? on_cell : Shifted(on_cell, 1.0, -1.0);
+  SmallPoly out = SmallPoly::Zero(3 * (from_rest.size() - 1) + 1);
+  for (int j = 0; j < from_rest.size(); ++j) out(3 * j) = from_rest(j);
+  return out;
+}
+
+// scale w^power p.
+SmallPoly TimesPower(const SmallPoly& p, int power, double scale) {
+  SmallPoly out = SmallPoly::Zero(p.size() + power);
+  out.tail(p.size()) = scale * p;
+  return out;
+}
+
+// a + b, of any two sizes.
+SmallPoly Sum(const SmallPoly& a, const SmallPoly& b) {
+  SmallPoly out = Padded(a, static_cast<int>(b.size()));
+  out.head(b.size()) += b;
+  return out;
+}
+
 // Is the point at the start (end = false) or end of piece i a rest point: b fixed at 0 and the
 // acceleration required to be 0 there (a stop, or a boundary at rest with zero acceleration and a
 // non-vanishing tangent)?
@@ -218,26 +244,6 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   const bool start = shape == CellShape::kRestStart;
   const double len = c.Len(piece, k);
   const double sign = start ? 1.0 : -1.0;
-  // f^(order) on the cell as a polynomial in sigma: the cell's polynomial in u, with u = sigma^3
-  // from the rest point (a start) or u = 1 - sigma^3 (an end).
-  const auto in_sigma = [&](int order, int a) {
-    const SmallPoly on_cell = c.OnCell(piece, k, order, a);
-    const SmallPoly from_rest = start ? on_cell : Shifted(on_cell, 1.0, -1.0);
-    SmallPoly out = SmallPoly::Zero(3 * (from_rest.size() - 1) + 1);
-    for (int j = 0; j < from_rest.size(); ++j) out(3 * j) = from_rest(j);
-    return out;
-  };
-  // scale sigma^power p, and a + b.
-  const auto times_power = [](const SmallPoly& p, int power, double scale) {
-    SmallPoly out = SmallPoly::Zero(p.size() + power);
-    out.tail(p.size()) = scale * p;
-    return out;
-  };
-  const auto sum = [](const SmallPoly& a, const SmallPoly& b) {
-    SmallPoly out = Padded(a, static_cast<int>(b.size()));
-    out.head(b.size()) += b;
-    return out;
-  };
   const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(piece)][0].cols()) - 1;  // of f'
   const bool exact = 3 * std::max(degree1, 0) + 3 <= internal::kMaxSmallPoly;
   double speed_per_b = 0.0;                           // sum over axes of the velocity bounds squared
@@ -245,12 +251,13 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   for (int a = 0; a < 3; ++a) {
     double v_per_sqrt_b, acc_bound, jerk_per_b15;
     if (exact) {
-      const SmallPoly f1 = in_sigma(1, a), f2 = in_sigma(2, a), f3 = in_sigma(3, a);
-      v_per_sqrt_b = BernsteinMax(c.bernstein, times_power(f1, 2, 1.0));
-      acc_bound = BernsteinMax(c.bernstein, sum(times_power(f1, 1, sign * 2.0 / (3.0 * len)), times_power(f2, 4, 1.0)));
+      const SmallPoly f1 = InRestTime(c, piece, k, 1, a), f2 = InRestTime(c, piece, k, 2, a);
+      const SmallPoly f3 = InRestTime(c, piece, k, 3, a);
+      v_per_sqrt_b = BernsteinMax(c.bernstein, TimesPower(f1, 2, 1.0));
+      acc_bound = BernsteinMax(c.bernstein, Sum(TimesPower(f1, 1, sign * 2.0 / (3.0 * len)), TimesPower(f2, 4, 1.0)));
       jerk_per_b15 = BernsteinMax(
-          c.bernstein, sum(sum(times_power(f1, 0, 2.0 / (9.0 * len * len)), times_power(f2, 3, sign * 2.0 / len)),
-                           times_power(f3, 6, 1.0)));
+          c.bernstein, Sum(Sum(TimesPower(f1, 0, 2.0 / (9.0 * len * len)), TimesPower(f2, 3, sign * 2.0 / len)),
+                           TimesPower(f3, 6, 1.0)));
     } else {
       const double m1 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 1, a));
       const double m2 = BernsteinMax(c.bernstein, c.OnCell(piece, k, 2, a));
@@ -414,26 +421,6 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   // The largest polynomials: v^2 = f'^2 w^4 q, 6 deg f' + 6 coefficients, and the exact rows' q P^2,
   // 6 deg f' + 4.
   if (6 * std::max(degree1, 0) + 6 > internal::kMaxSmallPoly) return false;
-  // f^(order) on the cell as a polynomial in w: the cell's polynomial in u, with u = w^3 from the
-  // rest point (a start) or u = 1 - w^3 (an end).
-  const auto in_w = [&](int order, int a) {
-    const SmallPoly on_cell = c.OnCell(piece, k, order, a);
-    const SmallPoly from_rest = start ? on_cell : Shifted(on_cell, 1.0, -1.0);
-    SmallPoly out = SmallPoly::Zero(3 * (from_rest.size() - 1) + 1);
-    for (int j = 0; j < from_rest.size(); ++j) out(3 * j) = from_rest(j);
-    return out;
-  };
-  // scale w^power p, and sums.
-  const auto shifted_up = [](const SmallPoly& p, int power, double scale) {
-    SmallPoly out = SmallPoly::Zero(p.size() + power);
-    out.tail(p.size()) = scale * p;
-    return out;
-  };
-  const auto sum = [](const SmallPoly& a, const SmallPoly& b) {
-    SmallPoly out = Padded(a, static_cast<int>(b.size()));
-    out.head(b.size()) += b;
-    return out;
-  };
   const int rest = start ? 0 : 2, alpha = kRestAlpha, far = RestFar(shape);
   // Per value (alpha, b_far): q, sddot's factor, the jerk's three factors.
   SmallPoly q[3], sddot[3], j1[3], j2[3];
@@ -450,12 +437,13 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   j2[far] = (SmallPoly(5) << 0.0, 0.0, 0.0, 0.0, 5.0).finished() * (sign / (2.0 * L));
   for (int j = 0; j < 3; ++j) out->q[j] = q[j];
   for (int a = 0; a < 3; ++a) {
-    const SmallPoly f1 = in_w(1, a), f2 = in_w(2, a), f3 = in_w(3, a);
+    const SmallPoly f1 = InRestTime(c, piece, k, 1, a), f2 = InRestTime(c, piece, k, 2, a);
+    const SmallPoly f3 = InRestTime(c, piece, k, 3, a);
     for (int j = 0; j < 3; ++j) {
-      const SmallPoly b = shifted_up(q[j], 4, 1.0);  // w^4 q = sdot^2
+      const SmallPoly b = TimesPower(q[j], 4, 1.0);  // w^4 q = sdot^2
       out->vel[a][j] = Multiply(Multiply(f1, f1), b);
-      out->acc[a][j] = sum(Multiply(f1, sddot[j]), Multiply(f2, b));
-      out->jerk[a][j] = sum(sum(Multiply(f1, j1[j]), Multiply(f2, j2[j])), Multiply(f3, shifted_up(q[j], 6, 1.0)));
+      out->acc[a][j] = Sum(Multiply(f1, sddot[j]), Multiply(f2, b));
+      out->jerk[a][j] = Sum(Sum(Multiply(f1, j1[j]), Multiply(f2, j2[j])), Multiply(f3, TimesPower(q[j], 6, 1.0)));
     }
   }
   return true;
