@@ -270,7 +270,9 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
           quad(f1 * std::sqrt(b), f1 * a + f2 * b);
           continue;
         }
-        const TemporalProfile::Point p = profile.AtS(i, s);
+        // Each cell's own state at both of its ends: the jerk's left and right limits at a grid
+        // point (AtS would evaluate the next cell at this cell's end), and no search for the cell.
+        const TemporalProfile::Point p = profile.InCell(i, k, u * profile.CellLength(i, k));
         const Eigen::Vector3d f3 = horner(d3, s);
         const double v = p.sdot;
         vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());

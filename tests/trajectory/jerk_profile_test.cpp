@@ -263,6 +263,28 @@ TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
   }
 }
 
+TEST(JerkProfile, InCellIsAtSInsideACellAndItsOwnStateAtItsEnds) {
+  const TemporalProfile profile = Mixed();
+  for (int i = 0; i < profile.num_pieces(); ++i) {
+    for (int k = 0; k < profile.cells_per_piece(); ++k) {
+      const double start = profile.CellStart(i, k), length = profile.CellLength(i, k);
+      // Inside: the same cell, the same formulas (AtS's sigma is (start + 0.3 L) - start, 0.3 L to
+      // an ulp of s, so agreement to 1e-12 relative).
+      const TemporalProfile::Point inside = profile.InCell(i, k, 0.3 * length), at = profile.AtS(i, start + 0.3 * length);
+      EXPECT_NEAR(inside.sdot, at.sdot, 1e-12 * std::max(1.0, std::abs(at.sdot)));
+      EXPECT_NEAR(inside.sdddot, at.sdddot, 1e-12 * std::max(1.0, std::abs(at.sdddot)));
+      // At its start, the cell's own state is AtS's (a grid point belongs to the cell that starts there).
+      EXPECT_EQ(profile.InCell(i, k, 0.0).sdot, profile.AtS(i, start).sdot);
+      // At its end, this cell's state: the speed is continuous, so it is the next cell's to rounding
+      // (b is continuous across cells; 1e-12 relative).
+      if (k + 1 < profile.cells_per_piece()) {
+        const double end = profile.InCell(i, k, length).sdot, next = profile.AtS(i, start + length).sdot;
+        EXPECT_NEAR(end, next, 1e-12 * std::max(1.0, next)) << "piece " << i << " cell " << k;
+      }
+    }
+  }
+}
+
 TEST(JerkProfile, SddotIsContinuousAndRestEndsAreAtRest) {
   const TemporalProfile profile = SmoothRestToRest();
   const double T = profile.total_time();

@@ -121,6 +121,11 @@ class TemporalProfile {
   // The state at s (clamped to [0, 1]) of piece i, straight from the cell's b(s) without inverting
   // time. A grid point belongs to the cell that starts there (s = 1: the last cell's end).
   Point AtS(int piece, double s) const;
+  // The state at sigma (clamped to [0, CellLength(piece, k)]) from the start of cell k of piece i,
+  // by that cell's own formulas at both of its ends (where AtS takes a grid point to the cell that
+  // starts there): the left and right limits at a grid point where the jerk steps. Piece and cell
+  // must be in range (0 <= k < cells_per_piece()); not checked.
+  Point InCell(int piece, int k, double sigma) const { return StateInCell(piece, k, sigma); }
 
  private:
   // Cell index and sigma = s - s_k for s in [0, 1] on a piece.
