@@ -401,7 +401,8 @@ void AddQuadrotorCellRows(JerkContext& c, int piece, int k, const SmallPoly (&sp
 //                           + f''' w^6 q,
 // with beta = b_far - alpha: polynomials in w linear in (alpha, b_far), like a regular cell's in u
 // and its three values. The jerk has the same form sqrt(q) P as a regular cell's sqrt(b) P, so the
-// same linearization (at the largest q on the cell, max(alpha, b_far)) or exact cubic rows bound it.
+// same linearization (at the largest q on each of kRestJerkParts parts of the cell) or exact cubic
+// rows bound it.
 // beta = 0 is a constant s-jerk from rest (the only rest shape before), exact on a line; beta < 0
 // lets the s-jerk ease off as the curvature terms grow.
 struct RestPolys {
@@ -707,10 +708,10 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
 
 // A rest cell of length h at the start (end = false) or end of piece i with a constant s-jerk: per
 // axis its jerk is b1^1.5 (f' 2 / (9 h^2) +- f'' 2 sigma^3 / h + f''' sigma^6) (see
-// AddConstantJerkRestRows). The largest value over the axes at the rest point (sigma = 0) over the largest
-// anywhere on the cell, each relative to the axis' limit: 1 on a line, less where the curvature
-// makes the jerk grow through the cell, so that the start keeps only that share of its jerk limit.
-// Sampled at 33 points (it only sizes the cell; the rows bound the jerk exactly).
+// AddConstantJerkRestRows). The largest value over the axes at the rest point (sigma = 0) over the
+// largest anywhere on the cell, each relative to the axis' limit: 1 on a line, less where the
+// curvature makes the jerk grow through the cell, so that the start keeps only that share of its
+// jerk limit. Sampled at 33 points (it only sizes the cell; the rows bound the jerk exactly).
 double RestJerkShare(const TemporalProblem& p, int piece, bool end, double h) {
   const double sign = end ? -1.0 : 1.0;
   double at_rest = 0.0, largest = 0.0;
