@@ -566,14 +566,13 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     if (mode == JerkRows::kNone && c.templates != nullptr) {
       int size = 0;
       for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
-      SmallPoly bern_jerk[3];
-      for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
-      // The basis in Bernstein form depends on the size alone: converted once per size (a rest
-      // cell's q each time).
-      SmallPoly rest_bernstein[3];
-      if (rest != nullptr) {
-        for (int j = 0; j < 3; ++j) rest_bernstein[j] = c.bernstein.Convert(Padded(root_basis[j], size));
-      } else if (c.basis_size != size) {
+      // A regular cell's rows in Bernstein form over the whole cell (the basis depends on the size
+      // alone: converted once per size); a rest cell's per part, below.
+      SmallPoly bern_jerk[3], rest_bernstein[3];
+      if (rest == nullptr) {
+        for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
+      }
+      if (rest == nullptr && c.basis_size != size) {
         for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
         c.basis_size = size;
       }
@@ -894,8 +893,6 @@ double LinearizationPoint(const double (&lb)[3], double floor) {
 }
 
 namespace {
-// w = 2^(-1/3) at a rest cell's middle in s (w^3 = 1/2), and b = w^4 q there.
-constexpr double kRestMiddleW = 0.7937005259840998;
 template <typename F>
 void ForEachRestCell(const TemporalDiscretization& d, F f) {
   const int K = d.cells_per_piece / 2;
@@ -911,16 +908,12 @@ void ForEachRestCell(const TemporalDiscretization& d, F f) {
 }  // namespace
 
 void RestAlphaToMiddles(const TemporalDiscretization& d, std::vector<double>* b) {
-  const double w4 = std::pow(kRestMiddleW, 4.0);
-  ForEachRestCell(d, [&](size_t alpha, size_t far) {
-    (*b)[alpha] = w4 * ((*b)[alpha] * (1.0 - kRestMiddleW) + (*b)[far] * kRestMiddleW);
-  });
+  ForEachRestCell(d, [&](size_t alpha, size_t far) { (*b)[alpha] = TemporalProfile::RestMiddle((*b)[alpha], (*b)[far]); });
 }
 
 void RestMiddlesToAlpha(const TemporalDiscretization& d, std::vector<double>* b) {
-  const double w4 = std::pow(kRestMiddleW, 4.0);
   ForEachRestCell(d, [&](size_t alpha, size_t far) {
-    (*b)[alpha] = std::max(0.0, ((*b)[alpha] / w4 - kRestMiddleW * (*b)[far]) / (1.0 - kRestMiddleW));
+    (*b)[alpha] = std::max(0.0, TemporalProfile::RestAlpha((*b)[alpha], (*b)[far]));
   });
 }
 

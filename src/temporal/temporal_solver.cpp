@@ -302,22 +302,16 @@ namespace internal {
 void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
                          const std::vector<double>& x, TemporalResult* result) {
   const int K = d.cells_per_piece;  // half cells in the jerk-limited mode
-  std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces),
-                                     std::vector<double>(static_cast<size_t>(K) + 1));
+  // b at every grid value (interior-point iterates may sit a rounding error below zero); a
+  // jerk-limited rest cell's middle value is q at its rest point in d, b at its middle in the profile.
+  std::vector<double> flat(d.grid.size());
+  for (size_t g = 0; g < d.grid.size(); ++g) flat[g] = std::max(0.0, d.GridB(static_cast<int>(g), x));
+  if (d.jerk_limited) RestAlphaToMiddles(d, &flat);
+  std::vector<std::vector<double>> b(static_cast<size_t>(d.num_pieces));
   for (int i = 0; i < d.num_pieces; ++i) {
-    for (int k = 0; k <= K; ++k) {
-      // Interior-point iterates may sit a rounding error below zero.
-      b[i][k] = std::max(0.0, d.GridB(d.GridIndex(i, k), x));
-    }
+    b[static_cast<size_t>(i)].assign(flat.begin() + d.GridIndex(i, 0), flat.begin() + d.GridIndex(i, K) + 1);
   }
   if (d.jerk_limited) {
-    // A rest cell's middle value is q at its rest point in d, b at its middle in the profile.
-    std::vector<double> flat(d.grid.size());
-    for (size_t g = 0; g < d.grid.size(); ++g) flat[g] = std::max(0.0, d.GridB(static_cast<int>(g), x));
-    RestAlphaToMiddles(d, &flat);
-    for (int i = 0; i < d.num_pieces; ++i) {
-      for (int k = 0; k <= K; ++k) b[i][k] = flat[static_cast<size_t>(d.GridIndex(i, k))];
-    }
     const int full = K / 2;
     std::vector<std::vector<CellShape>> shapes(static_cast<size_t>(d.num_pieces));
     for (int i = 0; i < d.num_pieces; ++i) {

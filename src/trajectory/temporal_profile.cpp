@@ -170,9 +170,8 @@ struct RestCell {
   double alpha = 0.0, beta = 0.0, L = 0.0;
   static constexpr double kMiddleW = 0.7937005259840998;  // 2^(-1/3)
   RestCell(double b_mid, double b_far, double length) : L(length) {
-    const double q_mid = b_mid / (kMiddleW * kMiddleW * kMiddleW * kMiddleW);
-    beta = (b_far - q_mid) / (1.0 - kMiddleW);
-    alpha = b_far - beta;
+    alpha = TemporalProfile::RestAlpha(b_mid, b_far);
+    beta = b_far - alpha;
     // Rounding of an alpha = 0 cell (relative to b_far) is not a negative alpha.
     if (alpha < 0.0 && alpha > -1e-12 * b_far) alpha = 0.0;
   }
@@ -203,6 +202,9 @@ struct RestCell {
     p->sdddot = (4.0 * alpha + 10.0 * beta * w) * root / (18.0 * L * L);
   }
 };
+
+// w^4 at a rest cell's middle in s (w^3 = 1/2).
+constexpr double kMiddleW4 = RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW;
 
 std::string CellName(size_t piece, int k) {
   return "cell " + std::to_string(k) + " of piece " + std::to_string(piece);
@@ -257,6 +259,15 @@ TemporalProfile TemporalProfile::TimeScaled(double factor) const {
   }
   for (double& t : scaled.cell_start_) t *= factor;
   return scaled;
+}
+
+double TemporalProfile::RestAlpha(double b_mid, double b_far) {
+  // q(w_mid) = b_mid / w_mid^4 = alpha (1 - w_mid) + b_far w_mid.
+  return (b_mid / kMiddleW4 - RestCell::kMiddleW * b_far) / (1.0 - RestCell::kMiddleW);
+}
+
+double TemporalProfile::RestMiddle(double alpha, double b_far) {
+  return kMiddleW4 * (alpha * (1.0 - RestCell::kMiddleW) + b_far * RestCell::kMiddleW);
 }
 
 TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> half_b,

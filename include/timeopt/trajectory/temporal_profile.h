@@ -127,6 +127,12 @@ class TemporalProfile {
   // must be in range (0 <= k < cells_per_piece()); not checked.
   Point InCell(int piece, int k, double sigma) const { return StateInCell(piece, k, sigma); }
 
+  // A rest cell's q at its rest point (alpha, see the header comment) from b at its middle in s and
+  // at its far end, and back: q is linear in w and b = w^4 q, with w^3 = 1/2 at the middle.
+  // (Negative for a middle value below 2^(-5/3) times the far one, which makes no profile.)
+  static double RestAlpha(double b_mid, double b_far);
+  static double RestMiddle(double alpha, double b_far);
+
  private:
   // Cell index and sigma = s - s_k for s in [0, 1] on a piece.
   void Locate(int piece, double s, int* k, double* sigma) const;
