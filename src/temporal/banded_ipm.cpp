@@ -222,13 +222,55 @@ bool GreedyProfile(const BandedProblem& p, std::vector<double>* out, double marg
   return true;
 }
 
+// A run of consecutive rows that start at the same unknown (BandedIpm).
+struct RowRun {
+  int begin = 0, end = 0;  // rows [begin, end)
+  int first = 0;           // their first unknown
+  int span = 0;            // the most unknowns one of them touches
+};
+// A cell's two forms on one window of unknowns (BandedIpm::EvaluateCells).
+struct CellWindow {
+  int lo = 0, width = 0;               // the unknowns lo .. lo + width - 1
+  double cv[2][2 * kMaxRowSpan] = {};  // the two forms' coefficients on them
+};
+
+}  // namespace
+
+// Every vector of a BandedIpm. Each solve empties them first (clear() keeps the capacity), so
+// it sees fresh, zero-filled vectors as before, on pages already touched.
+struct BandedIpmWorkspace::Buffers {
+  std::vector<RowRun> runs;
+  std::vector<int> order;
+  std::vector<double> x, s, z, grad, rd, rp, dx, ds, dz, inv_s, inv_z, gz, g_inv_s, g_cross, g_dz, rhs;
+  std::vector<double> v[kMaxRowSpan];
+  std::vector<CellWindow> windows;
+  Band hess, factor;
+  void Clear() {
+    runs.clear();
+    order.clear();
+    for (std::vector<double>* u : {&x, &s, &z, &grad, &rd, &rp, &dx, &ds, &dz, &inv_s, &inv_z, &gz, &g_inv_s, &g_cross, &g_dz, &rhs}) {
+      u->clear();
+    }
+    for (std::vector<double>& u : v) u.clear();
+    windows.clear();
+    hess.v.clear();
+    factor.v.clear();
+  }
+};
+
+BandedIpmWorkspace::BandedIpmWorkspace() : buffers_(std::make_unique<Buffers>()) {}
+BandedIpmWorkspace::~BandedIpmWorkspace() = default;
+
+namespace {
+
 // W: the width every row is treated as (its coefficients past `count` are 0, and the vectors over
 // the unknowns carry W zeros past n), so that the loops over a row's terms have a fixed length.
 template <int W>
 class BandedIpm {
  public:
-  BandedIpm(const BandedProblem& p, const BandedIpmSettings& settings)
-      : p_(p), settings_(settings), n_(p.n), m_(static_cast<int>(p.rows.size())) {
+  BandedIpm(const BandedProblem& p, const BandedIpmSettings& settings, BandedIpmWorkspace::Buffers& buffers)
+      : b_(buffers), p_(p), settings_(settings), n_(p.n), m_(static_cast<int>(p.rows.size())) {
+    b_.Clear();
     // The rows past the bounds in order of their first unknown (stable), so that runs are long:
     // 2,488 runs of 15,474 rows in the order given, 500 sorted, on the first jerk-limited solve at
     // m = 10, K = 50. The bound rows stay first (row v is -y_v <= 0).
@@ -653,34 +695,26 @@ class BandedIpm {
     for (int t = 0; t < W; ++t) sums->acc[t] += L::Load(&v_[t][i]) * weight;
   }
 
-  struct RowRun {
-    int begin = 0, end = 0;  // rows [begin, end)
-    int first = 0;           // their first unknown
-    int span = 0;            // the most unknowns one of them touches
-  };
-
+  BandedIpmWorkspace::Buffers& b_;
   const BandedProblem& p_;
   BandedIpmSettings settings_;
-  std::vector<RowRun> runs_;
+  std::vector<RowRun>& runs_ = b_.runs;
   int n_ = 0, m_ = 0;
-  std::vector<int> order_;       // row r here is row order_[r] of p_
+  std::vector<int>& order_ = b_.order;  // row r here is row order_[r] of p_
   // Row r here, and its bound: p_'s row order_[r].
   const BandedRow& Row(size_t r) const { return p_.rows[static_cast<size_t>(order_[r])]; }
   double Bound(size_t r) const { return p_.h[static_cast<size_t>(order_[r])]; }
-  std::vector<double> x_, s_, z_;
-  std::vector<double> grad_, rd_, rp_, dx_, ds_, dz_, inv_s_, inv_z_;
+  std::vector<double>&x_ = b_.x, &s_ = b_.s, &z_ = b_.z;
+  std::vector<double>&grad_ = b_.grad, &rd_ = b_.rd, &rp_ = b_.rp, &dx_ = b_.dx, &ds_ = b_.ds, &dz_ = b_.dz,
+  &inv_s_ = b_.inv_s, &inv_z_ = b_.inv_z;
   // G'z (kept through the steps), and the sums over the rows of one iteration: G' (1 / s),
   // G' (ds_a o dz_a / s), G' dz, and the predictor's right-hand side.
-  std::vector<double> gz_, g_inv_s_, g_cross_, g_dz_, rhs_;
-  std::vector<double> v_[W];  // the rows' coefficients as columns
-  struct CellWindow {
-    int lo = 0, width = 0;                  // the unknowns lo .. lo + width - 1
-    double cv[2][2 * kMaxRowSpan] = {};  // the two forms' coefficients on them
-  };
-  std::vector<CellWindow> windows_;  // per cell (over control values only)
+  std::vector<double>&gz_ = b_.gz, &g_inv_s_ = b_.g_inv_s, &g_cross_ = b_.g_cross, &g_dz_ = b_.g_dz, &rhs_ = b_.rhs;
+  std::vector<double> (&v_)[kMaxRowSpan] = b_.v;  // the rows' coefficients as columns (the first W)
+  std::vector<CellWindow>& windows_ = b_.windows;  // per cell (over control values only)
   double objective_ = 0.0;
   double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
-  Band hess_, factor_;
+  Band &hess_ = b_.hess, &factor_ = b_.factor;
 };
 
 }  // namespace
@@ -727,19 +761,36 @@ void BandedProblem::Reserve(size_t count) {
   id.reserve(count);
 }
 
-BandedProblem BandedProblem::WithoutRows(size_t count) const {
-  BandedProblem out;
-  out.n = n;
-  out.bandwidth = bandwidth;
-  out.controls = controls;
-  out.cells = cells;
-  out.grid_form = grid_form;
-  out.x_form = x_form;
-  out.cap = cap;
-  out.next_id = next_id;
-  out.kind = kind;
-  out.Reserve(count);
-  return out;
+void BandedProblem::Clear() {
+  n = 0;
+  bandwidth = 1;
+  controls = false;
+  for (auto* u : {&h, &cap}) u->clear();
+  rows.clear();
+  cells.clear();
+  grid_form.clear();
+  x_form.clear();
+  essential.clear();
+  id.clear();
+  next_id = -1;
+  kind = -1;
+}
+
+void BandedProblem::AssignWithoutRows(const BandedProblem& from, size_t count) {
+  n = from.n;
+  bandwidth = from.bandwidth;
+  controls = from.controls;
+  cells = from.cells;
+  grid_form = from.grid_form;
+  x_form = from.x_form;
+  cap = from.cap;
+  next_id = from.next_id;
+  kind = from.kind;
+  rows.clear();
+  h.clear();
+  essential.clear();
+  id.clear();
+  Reserve(count);
 }
 
 bool BandedProblem::AppendRow(BandedRow row, double bound) {
@@ -796,7 +847,7 @@ bool BandedProblem::AddCellRow(const CellMap& map, const double* coef, double bo
 
 bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why) {
   BandedProblem& p = *out;
-  p = BandedProblem();
+  p.Clear();
   p.controls = d.controls.has_value();
   p.n = p.controls ? d.controls->num_controls : d.num_vars;
   if (p.n <= 0 || d.num_vars <= 0) {
@@ -924,7 +975,8 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
 }
 
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
-                                    const BandedIpmSettings& settings, const std::vector<double>* warm) {
+                                    const BandedIpmSettings& settings, const std::vector<double>* warm,
+                                    BandedIpmWorkspace* workspace) {
   // (A cell's two forms are read into a window of 2 kMaxRowSpan values in Evaluate.)
   if (p.bandwidth > settings.max_bandwidth || p.bandwidth >= 2 * kMaxRowSpan) {
     BandedIpmOutcome out;
@@ -933,9 +985,11 @@ BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<do
   }
   int width = 1;
   for (const BandedRow& row : p.rows) width = std::max<int>(width, row.count);
-  if (width <= 2) return BandedIpm<2>(p, settings).Run(y0, warm);
-  if (width == 3) return BandedIpm<3>(p, settings).Run(y0, warm);
-  return BandedIpm<kMaxRowSpan>(p, settings).Run(y0, warm);
+  BandedIpmWorkspace local;
+  BandedIpmWorkspace::Buffers& buffers = (workspace != nullptr ? *workspace : local).buffers();
+  if (width <= 2) return BandedIpm<2>(p, settings, buffers).Run(y0, warm);
+  if (width == 3) return BandedIpm<3>(p, settings, buffers).Run(y0, warm);
+  return BandedIpm<kMaxRowSpan>(p, settings, buffers).Run(y0, warm);
 }
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings) {

@@ -25,6 +25,7 @@
 // does not try to certify) is handed to the conic solver, which decides. So statuses never depend
 // on this path.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -104,8 +105,11 @@ struct BandedProblem {
   int kind = -1;  // the kind AddRow gives its rows
   // Room for `count` rows in rows, h, essential and id.
   void Reserve(size_t count);
-  // The same unknowns, cells and forms without rows (room for `count`): a working set to fill.
-  BandedProblem WithoutRows(size_t count) const;
+  // Back to a default BandedProblem, keeping the vectors' memory.
+  void Clear();
+  // from's unknowns, cells and forms without rows (room for `count`): a working set to fill. Keeps
+  // the vectors' memory.
+  void AssignWithoutRows(const BandedProblem& from, size_t count);
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
@@ -125,6 +129,31 @@ struct BandedProblem {
   bool AddCellRow(const CellMap& map, const double* coef, double bound);
 };
 
+// The working memory of SolveBandedProblem (about 12 doubles per row), to keep between
+// solves: the sequential convex programme's solves then reuse pages already touched, where fresh
+// ones cost a page fault each (measured: 12% of a jerk-limited solve's time, in the kernel). Not
+// for two solves at once.
+class BandedIpmWorkspace {
+ public:
+  BandedIpmWorkspace();
+  ~BandedIpmWorkspace();
+  BandedIpmWorkspace(const BandedIpmWorkspace&) = delete;
+  BandedIpmWorkspace& operator=(const BandedIpmWorkspace&) = delete;
+  struct Buffers;
+  Buffers& buffers() { return *buffers_; }
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
+};
+
+// The working memory of the structured sequential convex programme (jerk_solver.cpp): its
+// problem, its working set and the interior-point solver's vectors. A TemporalSolver keeps one
+// from one jerk-limited solve to the next.
+struct SolveWorkspace {
+  BandedIpmWorkspace ipm;
+  BandedProblem problem, working_set;
+};
+
 // The structured problem of d (rows, cells and forms); false (not applicable) with a reason.
 bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std::string* why);
 
@@ -133,6 +162,7 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
 // rows' multipliers. With `warm` (a multiplier per row id, NaN for none: a previous solve of a
 // nearby problem; empty: none yet), the start is y0 itself with those multipliers, re-centred.
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
-                                    const BandedIpmSettings& settings, const std::vector<double>* warm = nullptr);
+                                    const BandedIpmSettings& settings, const std::vector<double>* warm = nullptr,
+                                    BandedIpmWorkspace* workspace = nullptr);
 
 }  // namespace timeopt::internal

@@ -311,10 +311,14 @@ struct StructuredScp {
 
 bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretization& d,
                         const internal::JerkTemplates& templates, std::vector<double> linearization,
-                        const internal::BandedIpmSettings& settings, bool jerk_aware, StructuredScp* out) {
+                        const internal::BandedIpmSettings& settings, bool jerk_aware,
+                        internal::SolveWorkspace* workspace, StructuredScp* out) {
   Clock::time_point start = Clock::now();
-  internal::BandedProblem base;
-  if (!internal::BuildBandedProblem(d, &base, &out->why)) return false;
+  // p: every row; w: a solve's working set of them (both in the workspace, whose memory the
+  // previous programme has touched already).
+  internal::BandedProblem& p = workspace->problem;
+  internal::BandedProblem& w = workspace->working_set;
+  if (!internal::BuildBandedProblem(d, &p, &out->why)) return false;
   // Every regular cell's grid values as forms on its window of control values, once (by g0).
   std::vector<internal::BandedProblem::CellMap> cell_map(d.grid.size());
   std::vector<char> mapped(d.grid.size(), 0);
@@ -330,11 +334,11 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   };
   // Room for every row at once (the jerk rows of each linearization follow the static ones): one
   // allocation, not a copy of ~1 MB per growth.
-  const size_t rows = base.rows.size() + templates.cell_rows.size() + templates.jerk_rows.size();
-  base.Reserve(rows);
+  const size_t rows = p.rows.size() + templates.cell_rows.size() + templates.jerk_rows.size();
+  p.Reserve(rows);
   for (const internal::GridRow& row : templates.cell_rows) {
-    base.kind = static_cast<int>(row.kind);
-    if (!add_cell_row(base, row.g0, row.coef.data())) {
+    p.kind = static_cast<int>(row.kind);
+    if (!add_cell_row(p, row.g0, row.coef.data())) {
       out->why = "a row over more than four control values, or a constant one violated";
       return false;
     }
@@ -344,30 +348,29 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // may leave out (a boundary value where the tangent and the curvature vanish is held only by
   // its cell's jerk rows), and a solve without them runs off towards infinite speed there: the
   // working set keeps every row over such a control.
-  std::vector<double> essential_bound(static_cast<size_t>(base.n), std::numeric_limits<double>::infinity());
-  for (size_t r = 0; r < base.rows.size(); ++r) {
-    const internal::BandedRow& row = base.rows[r];
-    if (!base.essential[r] || !(base.h[r] > 0.0)) continue;
+  std::vector<double> essential_bound(static_cast<size_t>(p.n), std::numeric_limits<double>::infinity());
+  for (size_t r = 0; r < p.rows.size(); ++r) {
+    const internal::BandedRow& row = p.rows[r];
+    if (!p.essential[r] || !(p.h[r] > 0.0)) continue;
     bool nonnegative = true;
     for (int t = 0; t < row.count; ++t) nonnegative = nonnegative && row.v[t] >= 0.0;
     if (!nonnegative) continue;
     for (int t = 0; t < row.count; ++t) {
       double& bound = essential_bound[static_cast<size_t>(row.first + t)];
-      if (row.v[t] > 0.0) bound = std::min(bound, base.h[r] / row.v[t]);
+      if (row.v[t] > 0.0) bound = std::min(bound, p.h[r] / row.v[t]);
     }
   }
-  base.kind = static_cast<int>(LinearRow::Kind::kJerk);  // the rows added below
-  for (const internal::BandedRow& row : base.rows) base.bandwidth = std::max(base.bandwidth, row.count - 1);
-  const size_t static_rows = base.rows.size();
+  p.kind = static_cast<int>(LinearRow::Kind::kJerk);  // the rows added below
+  for (const internal::BandedRow& row : p.rows) p.bandwidth = std::max(p.bandwidth, row.count - 1);
+  const size_t static_rows = p.rows.size();
   // The first start: the control values of the guess.
-  std::vector<double> y(static_cast<size_t>(base.n));
-  for (int v = 0; v < base.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
+  std::vector<double> y(static_cast<size_t>(p.n));
+  for (int v = 0; v < p.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
-  const int base_bandwidth = base.bandwidth;
+  const int base_bandwidth = p.bandwidth;
   // A solve's working set of p: p's unknowns, cells and forms, and rows chosen below.
-  internal::BandedProblem w = base.WithoutRows(rows);
-  internal::BandedProblem p = std::move(base);
+  w.AssignWithoutRows(p, rows);
   std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
@@ -445,7 +448,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
         solve_settings.tolerance = std::max(settings.tolerance, kFirstSolveTolerance);
         solve_settings.gap_tolerance = std::max(settings.gap_tolerance, kFirstSolveTolerance);
       }
-      outcome = internal::SolveBandedProblem(w, y, solve_settings, &z_by_id);
+      outcome = internal::SolveBandedProblem(w, y, solve_settings, &z_by_id, &workspace->ipm);
       out->solve_seconds += SecondsSince(start);
       out->iterations += outcome.iterations;
       out->rows = outcome.rows;
@@ -758,6 +761,9 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     internal::BandedIpmSettings settings;
     settings.gap_tolerance = kStructuredGap;
     settings.max_iterations = structured_jerk_iterations();
+    // The working memory of every banded solve below, kept for the next Solve.
+    if (!workspace_) workspace_ = std::make_unique<internal::SolveWorkspace>();
+    internal::SolveWorkspace& workspace = *workspace_;
     // The programme on a coarser grid first (kCoarsening times fewer cells): its answer, a
     // jerk-limited profile, is the first linearization and start on this grid, and says which
     // jerk rows can bind (the jerk-free guess says nothing of that, so its first solve takes
@@ -786,7 +792,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       internal::BandedIpmSettings coarse_settings = settings;
       coarse_settings.tolerance = std::max(settings.tolerance, kCoarseTolerance);
       coarse_settings.gap_tolerance = std::max(settings.gap_tolerance, kCoarseTolerance);
-      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, GridValues(dc, guess), coarse_settings, false, &scp);
+      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, GridValues(dc, guess), coarse_settings, false, &workspace, &scp);
       build_time += scp.build_seconds;
       solve_time += scp.solve_seconds;
       iterations += scp.iterations;
@@ -829,7 +835,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       if (!jerk_aware) first = jerk_free_start();
       if (!first.empty()) {
         StructuredScp scp;
-        bool answered = SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &scp);
+        bool answered = SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &workspace, &scp);
         if (!answered && jerk_aware) {
           // From the coarse answer it did not answer: once more from the jerk-free guess, as
           // without the coarse start, before the general path.
@@ -839,7 +845,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
           scp = StructuredScp();
           jerk_aware = false;
           first = jerk_free_start();
-          answered = !first.empty() && SolveStructuredScp(problem, d, templates, std::move(first), settings, false, &scp);
+          answered = !first.empty() && SolveStructuredScp(problem, d, templates, std::move(first), settings, false, &workspace, &scp);
         }
         build_time += scp.build_seconds;
         solve_time += scp.solve_seconds;

@@ -10,12 +10,16 @@
 #include <vector>
 
 #include "timeopt/core/enum_strings.h"
+#include "banded_ipm.h"
 #include "discretization_internal.h"
 #include "infeasibility.h"
 #include "solver_internal.h"
 #include "timeopt/core/option_check.h"
 
 namespace timeopt {
+
+TemporalSolver::TemporalSolver() = default;
+TemporalSolver::~TemporalSolver() = default;
 
 const char* ToString(TemporalStatus status) {
   switch (status) {
