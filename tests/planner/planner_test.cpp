@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -93,8 +95,9 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
 // The shipped forest's default plan, corner to corner. With every piece 1 long in s, minimizing
 // the jerk in s bent the curve sharply around the short pieces between long ones, and the
 // trajectory braked to 0.31 and 0.36 m/s in open space (radius of curvature 0.12 m): the uniform
-// parameterization must still show it (so this test can fail). With the chordal default no speed
-// more than 1 s from either end is below 1 m/s, and T is no longer than the 14.573 s it was.
+// parameterization with the old smoothness weight must still show it (so this test can fail). With
+// the defaults no speed more than 1 s from either end is below 1 m/s, and T is no longer than the
+// 14.573 s it was.
 TEST(Planner, ChordalPiecesRemoveTheHooksOfTheDefaultPlan) {
   const OccupancyMap map = OccupancyMap::Load(std::string(TIMEOPT_SOURCE_DIR) + "/maps/forest_20x20.bt");
   const Esdf esdf = Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d(-9, -9, -10), Eigen::Vector3d(29, 29, 11)));
@@ -107,11 +110,47 @@ TEST(Planner, ChordalPiecesRemoveTheHooksOfTheDefaultPlan) {
   EXPECT_GE(chordal.min_interior_speed, 1.0);
   EXPECT_LE(chordal.temporal.total_time, 14.573);
   EXPECT_GE(chordal.min_clearance, options.robot_radius);
+  // The old defaults: uniform pieces, smoothness weight 1.
   options.spatial.parameterization = SpatialParameterization::kUniform;
+  options.spatial.smoothness_weight = 1.0;
   const PlanResult uniform = planner.Plan(start, goal, options);
   ASSERT_TRUE(uniform.is_success()) << uniform.message;
   EXPECT_LT(uniform.min_interior_speed, 0.5);
   EXPECT_LT(uniform.min_curvature_radius, 0.5 * chordal.min_curvature_radius);
+}
+
+// The two of the 500 start/goal pairs of ../shared/maps/forest_gen (trials 168 and 246) whose
+// plans still braked below 0.3 vmax with chordal pieces and smoothness weight 1: each bent over a
+// few centimetres at a corner of the front end's path (radius of curvature 0.17 and 0.31 m). With
+// the default weight (2) neither does, and with weight 1 at least one still does (so this test can
+// fail). Skipped when ../shared/maps is absent.
+TEST(Planner, TheSmoothnessWeightRemovesTheHooksAtFrontEndCorners) {
+  struct Pair {
+    int map;
+    Eigen::Vector3d start, goal;
+  };
+  const Pair pairs[] = {{1, {-2.136234, -3.691912, 1.0}, {1.012682, 0.152169, 1.0}},
+                        {2, {-0.253391, 1.261093, 1.0}, {-4.200079, -0.723733, 1.0}}};
+  double slowest_old = std::numeric_limits<double>::infinity();
+  for (const Pair& pair : pairs) {
+    const std::string path = std::string(TIMEOPT_SHARED_DIR) + "/maps/forest_gen/forest" + std::to_string(pair.map) + ".bt";
+    if (!std::ifstream(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
+    const OccupancyMap map = OccupancyMap::Load(path);
+    const Esdf esdf = Esdf::FromMapRegion(map, PlanRegion(pair.start, pair.goal));  // as timeopt plan
+    Planner planner(esdf);
+    PlannerOptions options;
+    options.spatial.max_solver_time_in_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
+    const double floor = 0.3 * options.limits.max_velocity.minCoeff();
+    const PlanResult plan = planner.Plan(pair.start, pair.goal, options);
+    ASSERT_TRUE(plan.is_success()) << plan.message;
+    EXPECT_GE(plan.min_interior_speed, floor) << "forest" << pair.map;
+    EXPECT_GE(plan.min_clearance, options.robot_radius);
+    options.spatial.smoothness_weight = 1.0;
+    const PlanResult old = planner.Plan(pair.start, pair.goal, options);
+    ASSERT_TRUE(old.is_success()) << old.message;
+    slowest_old = std::min(slowest_old, old.min_interior_speed);
+  }
+  EXPECT_LT(slowest_old, 0.3 * PlannerOptions().limits.max_velocity.minCoeff());
 }
 
 TEST(Planner, MapsSearchStatusesAndValidatesNestedOptions) {
