@@ -31,6 +31,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -66,11 +67,16 @@ struct Run {
   double smoothness = 0.0;  // integral of |jerk|^2 dt, m^2/s^5
   double converge_ms = 0.0;
   double flight_time = 0.0;  // T of the jerk-limited profile, s
+  // The plan's curve quality (PlanResult): NaN for a flight of at most 2 s.
+  double min_interior_speed = std::nan("");
+  double min_curvature_radius = std::nan("");
 };
 
 struct Test {
   double density = 0.0;
   int index = 0;
+  int seed = 0;  // the forest's
+  Eigen::Vector3d start = Eigen::Vector3d::Zero(), goal = Eigen::Vector3d::Zero();
   Run runs[2];
 };
 
@@ -113,6 +119,8 @@ Run PlanOnce(Planner& planner, const Eigen::Vector3d& start, const Eigen::Vector
   if (run.success) {
     run.clearance = plan.min_clearance;
     run.flight_time = plan.temporal.total_time;
+    run.min_interior_speed = plan.min_interior_speed;
+    run.min_curvature_radius = plan.min_curvature_radius;
     const std::vector<TrajectoryState> samples = Trajectory(plan.curve, plan.temporal.profile).Sample(1000.0);
     for (size_t k = 0; k + 1 < samples.size(); ++k) {
       run.smoothness += samples[k].jerk.squaredNorm() * (samples[k + 1].t - samples[k].t);
@@ -167,6 +175,9 @@ int main(int argc, char** argv) {
         Test& test = results[static_cast<size_t>(t)];
         test.density = densities[di];
         test.index = t;
+        test.seed = static_cast<int>(forest.seed);
+        test.start = pairs[static_cast<size_t>(t)].first;
+        test.goal = pairs[static_cast<size_t>(t)].second;
         for (int f = 0; f < 2; ++f) test.runs[f] = PlanOnce(planner, pairs[static_cast<size_t>(t)].first,
                                                            pairs[static_cast<size_t>(t)].second, kFormulations[f]);
         const int count = ++done;
@@ -221,16 +232,30 @@ int main(int argc, char** argv) {
       }
     }
   }
+  // Every test's plans: where, and the figures of each formulation's flight.
+  std::ofstream per_test(out + "/convergence_tests.csv");
+  per_test << "density,seed,test,start_x,start_y,start_z,goal_x,goal_y,goal_z,formulation,success,flight_time,"
+              "clearance,min_interior_speed,min_curvature_radius\n";
+  for (const Test& t : all) {
+    for (int f = 0; f < 2; ++f) {
+      const Run& r = t.runs[f];
+      per_test << t.density << "," << t.seed << "," << t.index << "," << t.start.x() << "," << t.start.y() << ","
+               << t.start.z() << "," << t.goal.x() << "," << t.goal.y() << "," << t.goal.z() << ","
+               << kFormulationNames[f] << "," << (r.success ? 1 : 0) << "," << r.flight_time << "," << r.clearance
+               << "," << r.min_interior_speed << "," << r.min_curvature_radius << "\n";
+    }
+  }
   std::ofstream summary(out + "/convergence_summary.csv");
   summary << "density,formulation,tests,success_rate,median_cost_reduction,q1_cost_reduction,q3_cost_reduction,"
              "median_converge_ms,median_clearance,median_smoothness,median_flight_time";
   for (double b : kBudgetsMs) summary << ",median_cost_reduction_" << b << "ms";
-  summary << "\n";
+  summary << ",slowest_interior_speed,median_min_curvature_radius\n";
   std::vector<double> reduction_med[2], clearance_med[2], smooth_med[2], flight_med[2];
   std::vector<std::vector<double>> budget_med[2];  // [formulation][density][budget]
   for (double density : densities) {
     for (int f = 0; f < 2; ++f) {
-      std::vector<double> reduction, converge, clearance, smooth, flight;
+      std::vector<double> reduction, converge, clearance, smooth, flight, radius;
+      double slowest = std::numeric_limits<double>::infinity();
       std::vector<std::vector<double>> at_budget(kBudgetsMs.size());
       int success = 0, count = 0;
       for (const Test& t : all) {
@@ -245,6 +270,8 @@ int main(int argc, char** argv) {
           clearance.push_back(r.clearance);
           smooth.push_back(r.smoothness);
           flight.push_back(r.flight_time);
+          if (std::isfinite(r.min_interior_speed)) slowest = std::min(slowest, r.min_interior_speed);
+          if (std::isfinite(r.min_curvature_radius)) radius.push_back(r.min_curvature_radius);
         }
       }
       summary << density << "," << kFormulationNames[f] << "," << count << ","
@@ -256,7 +283,7 @@ int main(int argc, char** argv) {
         medians.push_back(Quantile(values, 0.5));
         summary << "," << medians.back();
       }
-      summary << "\n";
+      summary << "," << (std::isfinite(slowest) ? slowest : std::nan("")) << "," << Quantile(radius, 0.5) << "\n";
       budget_med[f].push_back(medians);
       flight_med[f].push_back(Quantile(flight, 0.5));
       reduction_med[f].push_back(Quantile(reduction, 0.5));

@@ -143,7 +143,8 @@ int main(int argc, char** argv) {
       << " m/s^2 per axis, K " << base.temporal_cells_per_piece << ", max_segment_length "
       << base.max_segment_length << " m, certified constraints\n";
   csv << "radius,formulation,map_id,trial,status,attempts,pieces,search_ms,spatial_ms,check_ms,"
-         "temporal_ms,total_ms,iterations,path_length,min_clearance,duration,baseline_duration\n";
+         "temporal_ms,total_ms,iterations,path_length,min_clearance,duration,baseline_duration,"
+         "min_interior_speed,min_curvature_radius\n";
   for (const Row& r : rows) {
     double baseline = 0.0;
     for (double d : r.plan.spatial.durations) baseline += d;
@@ -154,7 +155,7 @@ int main(int argc, char** argv) {
         << r.plan.times.temporal_ms << "," << r.plan.times.total_ms << ","
         << r.plan.spatial.iterations.size() << "," << r.plan.path_length << ","
         << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0)
-        << "," << baseline << "\n";
+        << "," << baseline << "," << r.plan.min_interior_speed << "," << r.plan.min_curvature_radius << "\n";
   }
 
   // Convergence records (paper Fig. 4): the last spatial attempt's iterations, cost relative to

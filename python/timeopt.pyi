@@ -164,6 +164,8 @@ class PlanResult:
     waypoints: Array
     path_length: float
     min_clearance: float
+    min_interior_speed: float  # m/s, more than 1 s from either end (NaN: a flight of at most 2 s)
+    min_curvature_radius: float  # m, over the same part
     start_scale: float
     total_time: float
     def is_success(self) -> bool: ...

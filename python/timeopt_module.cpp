@@ -724,6 +724,8 @@ PYBIND11_MODULE(timeopt, m) {
       .def_property_readonly("waypoints", [](const PlanResult& r) { return ToRows(r.waypoints); })
       .def_readonly("path_length", &PlanResult::path_length)
       .def_readonly("min_clearance", &PlanResult::min_clearance)
+      .def_readonly("min_interior_speed", &PlanResult::min_interior_speed)
+      .def_readonly("min_curvature_radius", &PlanResult::min_curvature_radius)
       .def_readonly("start_scale", &PlanResult::start_scale)
       .def_property_readonly("total_time", [](const PlanResult& r) { return r.temporal.total_time; })
       .def("is_success", &PlanResult::is_success)

@@ -765,8 +765,9 @@ void BandedProblem::Clear() {
   n = 0;
   bandwidth = 1;
   controls = false;
-  for (auto* u : {&h, &cap}) u->clear();
   rows.clear();
+  h.clear();
+  cap.clear();
   cells.clear();
   grid_form.clear();
   x_form.clear();
