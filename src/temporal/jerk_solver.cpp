@@ -304,6 +304,14 @@ TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b
 // The profile's exact time for b at every half-grid value of the jerk-limited d.
 double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) { return ProfileOf(d, b).total_time(); }
 
+// Whether the row has a term over a marked unknown.
+bool TouchesMarked(const internal::BandedRow& row, const std::vector<char>& marked) {
+  for (int t = 0; t < row.count; ++t) {
+    if (marked[static_cast<size_t>(row.first + t)]) return true;
+  }
+  return false;
+}
+
 // The sequential convex programme on the structured path (banded_ipm.h), over d's control values:
 // d (from DiscretizeJerkLimitedTemplates) and the velocity and acceleration templates become a
 // BandedProblem once; each convex solve adds the jerk rows linearized at the previous answer (from
@@ -386,9 +394,10 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
   if (jerk_aware) z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
-  size_t loose_solves = 0;  // 1 once a loose first solve has run (its T is out->history[0])
+  // 1 when the first solve, from the jerk-free guess, is a loose one (its T is out->history[0]).
+  const size_t loose_solves = problem.max_scp_iterations > 1 && !jerk_aware ? 1 : 0;
   for (int n = 0; n < problem.max_scp_iterations; ++n) {
-    const bool first_loose = n == 0 && problem.max_scp_iterations > 1 && !jerk_aware;
+    const bool first_loose = n == 0 && loose_solves == 1;
     start = Clock::now();
     p.rows.resize(static_rows);
     p.h.resize(static_rows);
@@ -418,22 +427,17 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     for (int c = 0; c < p.n; ++c) {
       loose[static_cast<size_t>(c)] = essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
     }
-    const auto over_loose = [&](const internal::BandedRow& row) {
-      for (int t = 0; t < row.count; ++t) {
-        if (loose[static_cast<size_t>(row.first + t)]) return true;
-      }
-      return false;
-    };
     std::vector<char> keep(p.rows.size());
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
     // takes all of them; one from the coarse programme's jerk-limited answer only those near
     // their bound there.
     for (size_t r = 0; r < p.rows.size(); ++r) {
       keep[r] = p.essential[r] || (h == 0 && !jerk_aware && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r] ||
-                over_loose(p.rows[r]);
+                TouchesMarked(p.rows[r], loose);
     }
     out->build_seconds += SecondsSince(start);
     internal::BandedIpmOutcome outcome;
+    std::vector<double> values;  // the rows' values at a round's answer
     for (int round = 0;; ++round) {
       start = Clock::now();
       // The working set's rows, into w (the same unknowns, cells and forms as p).
@@ -486,33 +490,29 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       // that has a violated row, as GrowWorkingSet adds, took 2.4 x more rows to the next round
       // on the benchmark's curves); the last round takes every row.
       start = Clock::now();
+      // Every row's value at the answer, once per round.
+      values.resize(p.rows.size());
       double given = 0.0;
       for (size_t r = 0; r < p.rows.size(); ++r) {
-        if (keep[r]) given = std::max(given, p.rows[r].Value(outcome.y) - p.h[r]);
+        values[r] = p.rows[r].Value(outcome.y);
+        if (keep[r]) given = std::max(given, values[r] - p.h[r]);
       }
+      const auto left_out_violated = [&](size_t r) { return !keep[r] && values[r] - p.h[r] > given; };
       bool violated = false;
-      for (size_t r = 0; r < p.rows.size() && !violated; ++r) {
-        violated = !keep[r] && p.rows[r].Value(outcome.y) - p.h[r] > given;
-      }
+      for (size_t r = 0; r < p.rows.size() && !violated; ++r) violated = left_out_violated(r);
       if (violated) {
         // The controls within kViolatedReach of a violated row's: every jerk row over them joins.
         std::vector<char> near(static_cast<size_t>(p.n), 0);
         for (size_t r = 0; r < p.rows.size(); ++r) {
+          if (!left_out_violated(r)) continue;
           const internal::BandedRow& row = p.rows[r];
-          if (keep[r] || !(row.Value(outcome.y) - p.h[r] > given)) continue;
           const int lo = std::max(0, row.first - kViolatedReach);
           const int hi = std::min(p.n - 1, row.first + row.count - 1 + kViolatedReach);
           for (int c = lo; c <= hi; ++c) near[static_cast<size_t>(c)] = 1;
         }
-        const auto touches_near = [&](const internal::BandedRow& row) {
-          for (int t = 0; t < row.count; ++t) {
-            if (near[static_cast<size_t>(row.first + t)]) return true;
-          }
-          return false;
-        };
         for (size_t r = 0; r < p.rows.size(); ++r) {
-          bool add = round + 1 >= kMaxWorkingSetRounds || p.rows[r].Value(outcome.y) >= kWorkingSetFraction * p.h[r] ||
-                     (r >= static_rows && touches_near(p.rows[r]));
+          const bool add = round + 1 >= kMaxWorkingSetRounds || values[r] >= kWorkingSetFraction * p.h[r] ||
+                           (r >= static_rows && TouchesMarked(p.rows[r], near));
           keep[r] = keep[r] || add;
         }
         y = outcome.y;
@@ -544,10 +544,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     y = std::move(outcome.y);
     // The stopping tests read the T of the solves whose answer counts: a loose first solve's is
     // too rough (up to kFirstSolveTolerance).
-    if (first_loose) {
-      loose_solves = 1;
-      continue;
-    }
+    if (first_loose) continue;
     const double* t = out->history.data() + loose_solves;
     const size_t k = out->history.size() - loose_solves;
     if (k >= 2 && std::abs(t[k - 2] - T) <= problem.scp_tolerance * T) break;
