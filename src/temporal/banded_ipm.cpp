@@ -18,6 +18,7 @@
 #include "banded_ipm.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -27,6 +28,14 @@
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+// The row passes also in AVX2 and FMA, taken where the processor has them (GCC and Clang on
+// x86-64; banded_ipm_rows.inc).
+#if defined(__x86_64__) && defined(__GNUC__)
+#define TIMEOPT_AVX2_ROWS 1
+#include <immintrin.h>
+#else
+#define TIMEOPT_AVX2_ROWS 0
 #endif
 
 namespace timeopt::internal {
@@ -233,6 +242,92 @@ struct CellWindow {
   int lo = 0, width = 0;               // the unknowns lo .. lo + width - 1
   double cv[2][2 * kMaxRowSpan] = {};  // the two forms' coefficients on them
 };
+
+// The views of BandedIpm's vectors over the rows that the passes read and write.
+template <int W>
+struct RowData {
+  double* s = nullptr;
+  double* z = nullptr;
+  double* rp = nullptr;
+  double* inv_s = nullptr;
+  double* inv_z = nullptr;
+  double* ds = nullptr;
+  double* dz = nullptr;
+  const double* v[W] = {};  // the rows' coefficients as columns
+};
+
+// What the passes over the rows for a direction give (banded_ipm_rows.inc).
+struct DirectionTotals {
+  double inverse = 0.0;       // 1 / the largest step that keeps s, z >= 0
+  double s1 = 0.0, s2 = 0.0;  // sum s dz + z ds and sum ds dz
+};
+// The row passes for every machine: two rows at a time (Pair).
+namespace generic {
+using Wide = Pair;
+#define TIMEOPT_ROWS_TARGET
+#include "banded_ipm_rows.inc"
+#undef TIMEOPT_ROWS_TARGET
+}  // namespace generic
+
+#if TIMEOPT_AVX2_ROWS
+// The same passes four rows at a time, compiled for AVX2 and FMA (whatever the build's flags);
+// only called where the processor has both (RowPassesAvx2).
+#pragma GCC push_options
+#pragma GCC target("avx2,fma")
+namespace avx2 {
+// (Each function says its target itself: GCC does not give the pragma's to functions defined in a
+// class.)
+#define TIMEOPT_AVX2 __attribute__((target("avx2,fma")))
+struct Quad {
+  __m256d v;
+  Quad() = default;  // uninitialized (the passes zero their sums)
+  TIMEOPT_AVX2 explicit Quad(__m256d a) : v(a) {}
+  TIMEOPT_AVX2 Quad(double a) : v(_mm256_set1_pd(a)) {}  // NOLINT: broadcast, as a double converts
+  TIMEOPT_AVX2 Quad operator-() const { return Quad(_mm256_sub_pd(_mm256_setzero_pd(), v)); }
+  TIMEOPT_AVX2 Quad& operator+=(Quad a) { v = _mm256_add_pd(v, a.v); return *this; }
+};
+TIMEOPT_AVX2 inline Quad operator+(Quad a, Quad b) { return Quad(_mm256_add_pd(a.v, b.v)); }
+TIMEOPT_AVX2 inline Quad operator-(Quad a, Quad b) { return Quad(_mm256_sub_pd(a.v, b.v)); }
+TIMEOPT_AVX2 inline Quad operator*(Quad a, Quad b) { return Quad(_mm256_mul_pd(a.v, b.v)); }
+TIMEOPT_AVX2 inline Quad operator/(Quad a, Quad b) { return Quad(_mm256_div_pd(a.v, b.v)); }
+}  // namespace avx2
+template <>
+struct Lanes<avx2::Quad> {
+  using Quad = avx2::Quad;
+  TIMEOPT_AVX2 static Quad Load(const double* p) { return Quad(_mm256_loadu_pd(p)); }
+  TIMEOPT_AVX2 static void Store(double* p, Quad a) { _mm256_storeu_pd(p, a.v); }
+  // The larger of a and b, and a when b is NaN (as std::max(a, b)).
+  TIMEOPT_AVX2 static Quad Max(Quad a, Quad b) { return Quad(_mm256_max_pd(b.v, a.v)); }
+  TIMEOPT_AVX2 static double Sum(Quad a) {
+    const __m128d pair = _mm_add_pd(_mm256_castpd256_pd128(a.v), _mm256_extractf128_pd(a.v, 1));
+    return _mm_cvtsd_f64(_mm_add_sd(pair, _mm_unpackhi_pd(pair, pair)));
+  }
+  TIMEOPT_AVX2 static double MaxOf(Quad a) {
+    const __m128d pair = _mm_max_pd(_mm256_extractf128_pd(a.v, 1), _mm256_castpd256_pd128(a.v));
+    return _mm_cvtsd_f64(_mm_max_sd(_mm_unpackhi_pd(pair, pair), pair));
+  }
+};
+namespace avx2 {
+using Wide = Quad;
+#define TIMEOPT_ROWS_TARGET TIMEOPT_AVX2
+#include "banded_ipm_rows.inc"
+#undef TIMEOPT_ROWS_TARGET
+}  // namespace avx2
+#undef TIMEOPT_AVX2
+#pragma GCC pop_options
+#endif
+
+// Whether the passes run four rows at a time: on a processor with AVX2 and FMA, unless
+// SetWideRowPasses(false) said otherwise.
+std::atomic<bool> wide_row_passes{true};
+bool RowPassesAvx2() {
+#if TIMEOPT_AVX2_ROWS
+  static const bool supported = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return supported && wide_row_passes.load(std::memory_order_relaxed);
+#else
+  return false;
+#endif
+}
 
 }  // namespace
 
@@ -442,28 +537,33 @@ class BandedIpm {
   void EvaluateCells() {
     grad_.assign(static_cast<size_t>(n_ + W), 0.0);
     hess_.Reset(n_, p_.bandwidth);
-    objective_ = 0.0;
+    // (The objective in a local: summed in the member, each cell's stores into grad_ and hess_
+    // forced it through memory.)
+    double objective = 0.0;
     for (const BandedCell& c : p_.cells) {
       const double b0 = std::max(c.b[0].Value(x_), 0.0), b1 = std::max(c.b[1].Value(x_), 0.0);
       const double r0 = std::sqrt(b0), r1 = std::sqrt(b1);
       const double S = r0 + r1;
-      objective_ += c.c / S + c.reg * (b1 - b0) * (b1 - b0);
-      const double half = 0.5 * c.c;
+      // Three divisions, every term from them (the divider bounds this loop).
+      const double inv_S = 1.0 / S;
+      objective += c.c * inv_S + c.reg * (b1 - b0) * (b1 - b0);
+      // c / (2 S^2), the factor of every derivative of c / S.
+      const double q = 0.5 * c.c * inv_S * inv_S;
       const double reg_grad = 2.0 * c.reg * (b1 - b0);
       // Derivatives in b0, b1; a constant b has none.
       const bool free0 = c.b[0].count > 0, free1 = c.b[1].count > 0;
       double db[2] = {-reg_grad, reg_grad};
       double h00 = 2.0 * c.reg, h11 = 2.0 * c.reg, h01 = -2.0 * c.reg;
-      const double S2 = S * S;
+      const double inv_r0 = free0 ? 1.0 / r0 : 0.0, inv_r1 = free1 ? 1.0 / r1 : 0.0;
       if (free0) {
-        db[0] += -half / (S2 * r0);
-        h00 += half / (S2 * b0) * (1.0 / S + 0.5 / r0);
+        db[0] += -q * inv_r0;
+        h00 += q * inv_r0 * inv_r0 * (inv_S + 0.5 * inv_r0);
       }
       if (free1) {
-        db[1] += -half / (S2 * r1);
-        h11 += half / (S2 * b1) * (1.0 / S + 0.5 / r1);
+        db[1] += -q * inv_r1;
+        h11 += q * inv_r1 * inv_r1 * (inv_S + 0.5 * inv_r1);
       }
-      if (free0 && free1) h01 += half / (S2 * S * r0 * r1);
+      if (free0 && free1) h01 += q * inv_S * inv_r0 * inv_r1;
       if (!p_.controls) {
         // One unknown per value (the paper's and certified rows): the terms directly.
         const double s0 = c.b[0].coef[0], s1 = c.b[1].coef[0];
@@ -496,6 +596,7 @@ class BandedIpm {
         }
       }
     }
+    objective_ = objective;
     rd_.resize(static_cast<size_t>(n_ + W));
     for (size_t v = 0; v < static_cast<size_t>(n_ + W); ++v) rd_[v] = grad_[v] + gz_[v];
   }
@@ -504,8 +605,7 @@ class BandedIpm {
   void RowResiduals() {
     gz_.assign(static_cast<size_t>(n_ + W), 0.0);
     rp_.resize(static_cast<size_t>(m_));
-    rp_max_ = 0.0;
-    gap_ = 0.0;
+    double rp_max = 0.0, gap = 0.0;  // (locals: see EvaluateCells)
     for (const RowRun& run : runs_) {
       double acc[W] = {};
       for (int r = run.begin; r < run.end; ++r) {
@@ -514,11 +614,13 @@ class BandedIpm {
         for (int t = 0; t < W; ++t) acc[t] += row.v[t] * z_[i];
         const double rp = Dot(row, x_) + s_[i] - Bound(i);
         rp_[i] = rp;
-        rp_max_ = std::max(rp_max_, std::abs(rp));
-        gap_ += s_[i] * z_[i];
+        rp_max = std::max(rp_max, std::abs(rp));
+        gap += s_[i] * z_[i];
       }
       for (int t = 0; t < run.span; ++t) gz_[static_cast<size_t>(run.first + t)] += acc[t];
     }
+    rp_max_ = rp_max;
+    gap_ = gap;
   }
 
   bool Converged() const {
@@ -548,23 +650,7 @@ class BandedIpm {
     g_inv_s_.assign(static_cast<size_t>(n_ + W), 0.0);
     inv_s_.resize(static_cast<size_t>(m_));
     inv_z_.resize(static_cast<size_t>(m_));
-    double mu = 0.0;
-    for (const RowRun& run : runs_) {
-      MatrixSums<Pair> two;
-      MatrixSums<double> one;
-      int r = run.begin;
-      for (; r + 2 <= run.end; r += 2) MatrixRows(r, &two);
-      for (; r < run.end; ++r) MatrixRows(r, &one);
-      mu += Lanes<Pair>::Sum(two.mu) + one.mu;
-      for (int a = 0; a < run.span; ++a) {
-        dx_[static_cast<size_t>(run.first + a)] += Lanes<Pair>::Sum(two.acc[a]) + one.acc[a];
-        g_inv_s_[static_cast<size_t>(run.first + a)] += Lanes<Pair>::Sum(two.acc_inv[a]) + one.acc_inv[a];
-        for (int b = 0; b <= a; ++b) {
-          const double sum = Lanes<Pair>::Sum(two.block[a][b]) + one.block[a][b];
-          if (sum != 0.0) factor_.At(run.first + a, run.first + b) += sum;
-        }
-      }
-    }
+    double mu = MatrixPass();
     mu /= m_;
     if (!factor_.Factor()) return false;
     rhs_ = dx_;
@@ -591,108 +677,46 @@ class BandedIpm {
     const double alpha = std::min(1.0, kStepFraction * (totals.inverse > 0.0 ? 1.0 / totals.inverse : kInf));
     if (!(alpha > 0.0)) return false;
     // The step, and r_p, G'z and the figures Converged reads after it.
-    const double keep = 1.0 - alpha;
-    rp_max_ = 0.0;
-    gap_ = 0.0;
-    for (size_t r = 0; r < static_cast<size_t>(m_); ++r) {
-      s_[r] += alpha * ds_[r];
-      z_[r] += alpha * dz_[r];
-      rp_[r] *= keep;
-      rp_max_ = std::max(rp_max_, std::abs(rp_[r]));
-      gap_ += s_[r] * z_[r];
-    }
+#if TIMEOPT_AVX2_ROWS
+    if (wide_) avx2::StepPass<W>(Rows(), m_, alpha, &rp_max_, &gap_);
+    else
+#endif
+      generic::StepPass<W>(Rows(), m_, alpha, &rp_max_, &gap_);
     for (size_t v = 0; v < gz_.size(); ++v) gz_[v] += alpha * g_dz_[v];
     // The bound rows keep x = s exactly (their residual is 0 and stays 0 up to rounding).
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) x_[v] = s_[v];
     return true;
   }
 
-  template <class T>
-  struct MatrixSums {
-    T block[W][W] = {};  // lower triangle
-    T acc[W] = {}, acc_inv[W] = {};
-    T mu = T(0.0);
-  };
-  // Pass 1 for the rows r.. (one, or two with T = Pair).
-  template <class T>
-  void MatrixRows(int r, MatrixSums<T>* sums) {
-    using L = Lanes<T>;
-    const size_t i = static_cast<size_t>(r);
-    const T s = L::Load(&s_[i]), z = L::Load(&z_[i]), rp = L::Load(&rp_[i]);
-    const T is = T(1.0) / s;
-    L::Store(&inv_s_[i], is);
-    L::Store(&inv_z_[i], T(1.0) / z);
-    const T w = z * is;
-    sums->mu += s * z;
-    const T t = z - w * rp;
-    T v[W];
-    for (int a = 0; a < W; ++a) v[a] = L::Load(&v_[a][i]);
-    for (int a = 0; a < W; ++a) {
-      const T wa = w * v[a];
-      sums->acc[a] += v[a] * t;
-      sums->acc_inv[a] += v[a] * is;
-      for (int b = 0; b <= a; ++b) sums->block[a][b] += wa * v[b];
-    }
+  // The passes over the rows (banded_ipm_rows.inc), four rows at a time where the processor
+  // allows (RowPassesAvx2), else two.
+  RowData<W> Rows() {
+    RowData<W> d;
+    d.s = s_.data();
+    d.z = z_.data();
+    d.rp = rp_.data();
+    d.inv_s = inv_s_.data();
+    d.inv_z = inv_z_.data();
+    d.ds = ds_.data();
+    d.dz = dz_.data();
+    for (int t = 0; t < W; ++t) d.v[t] = v_[t].data();
+    return d;
   }
-
-  struct DirectionTotals {
-    double inverse = 0.0;  // 1 / the largest step that keeps s, z >= 0
-    double s1 = 0.0, s2 = 0.0;  // sum s dz + z ds and sum ds dz
-  };
-  template <class T>
-  struct DirectionSums {
-    T acc[W] = {};
-    T inverse = T(0.0), s1 = T(0.0), s2 = T(0.0);
-  };
-  // Passes 2 and 3: from dx_ (solved), ds = -r_p - G dx and dz = (z o (r_p + G dx) - rc) / s into
-  // ds_, dz_, with rc = s o z for the predictor (shift == nullptr) and s o z + ds_a o dz_a - shift
-  // for the corrector (ds_a, dz_a: the predictor's, still in ds_, dz_); into *sums G' (ds o dz / s)
-  // for the predictor, G' dz for the corrector.
+  // Pass 1: M = grad^2 J + G' (Z / S) G into factor_, the predictor's right-hand side into dx_,
+  // G' (1 / s) into g_inv_s_; returns s'z.
+  double MatrixPass() {
+#if TIMEOPT_AVX2_ROWS
+    if (wide_) return avx2::MatrixPass<W>(Rows(), runs_, dx_.data(), g_inv_s_.data(), &factor_);
+#endif
+    return generic::MatrixPass<W>(Rows(), runs_, dx_.data(), g_inv_s_.data(), &factor_);
+  }
+  // Passes 2 and 3: from dx_ (solved), ds and dz into ds_, dz_, and into *sums G' (ds o dz / s)
+  // for the predictor (shift == nullptr), G' dz for the corrector.
   DirectionTotals Directions(const double* shift, std::vector<double>* sums) {
-    DirectionTotals totals;
-    Pair pair_inverse(0.0);
-    for (const RowRun& run : runs_) {
-      double window[W];
-      for (int t = 0; t < W; ++t) window[t] = dx_[static_cast<size_t>(run.first + t)];
-      DirectionSums<Pair> two;
-      DirectionSums<double> one;
-      int r = run.begin;
-      if (shift == nullptr) {
-        for (; r + 2 <= run.end; r += 2) DirectionRows<Pair, false>(r, window, 0.0, &two);
-        for (; r < run.end; ++r) DirectionRows<double, false>(r, window, 0.0, &one);
-      } else {
-        for (; r + 2 <= run.end; r += 2) DirectionRows<Pair, true>(r, window, *shift, &two);
-        for (; r < run.end; ++r) DirectionRows<double, true>(r, window, *shift, &one);
-      }
-      for (int t = 0; t < run.span; ++t) (*sums)[static_cast<size_t>(run.first + t)] += Lanes<Pair>::Sum(two.acc[t]) + one.acc[t];
-      pair_inverse = MaxPair(pair_inverse, two.inverse);
-      totals.inverse = std::max(totals.inverse, one.inverse);
-      totals.s1 += Lanes<Pair>::Sum(two.s1) + one.s1;
-      totals.s2 += Lanes<Pair>::Sum(two.s2) + one.s2;
-    }
-    totals.inverse = std::max(totals.inverse, MaxOfPair(pair_inverse));
-    return totals;
-  }
-  template <class T, bool kCorrector>
-  void DirectionRows(int r, const double (&window)[W], double shift, DirectionSums<T>* sums) {
-    using L = Lanes<T>;
-    const size_t i = static_cast<size_t>(r);
-    T gdx = T(0.0);
-    for (int t = 0; t < W; ++t) gdx += L::Load(&v_[t][i]) * T(window[t]);
-    const T s = L::Load(&s_[i]), z = L::Load(&z_[i]), rp = L::Load(&rp_[i]), is = L::Load(&inv_s_[i]);
-    T rc = s * z;
-    if (kCorrector) rc = rc + L::Load(&ds_[i]) * L::Load(&dz_[i]) - T(shift);
-    const T ds = -rp - gdx;
-    const T dz = (z * (rp + gdx) - rc) * is;
-    L::Store(&ds_[i], ds);
-    L::Store(&dz_[i], dz);
-    sums->inverse = L::Max(sums->inverse, L::Max(-ds * is, -dz * L::Load(&inv_z_[i])));
-    const T weight = kCorrector ? dz : ds * dz * is;
-    if (!kCorrector) {
-      sums->s1 += s * dz + z * ds;
-      sums->s2 += ds * dz;
-    }
-    for (int t = 0; t < W; ++t) sums->acc[t] += L::Load(&v_[t][i]) * weight;
+#if TIMEOPT_AVX2_ROWS
+    if (wide_) return avx2::DirectionPass<W>(Rows(), runs_, dx_.data(), shift, sums->data());
+#endif
+    return generic::DirectionPass<W>(Rows(), runs_, dx_.data(), shift, sums->data());
   }
 
   BandedIpmWorkspace::Buffers& b_;
@@ -714,6 +738,7 @@ class BandedIpm {
   std::vector<CellWindow>& windows_ = b_.windows;  // per cell (over control values only)
   double objective_ = 0.0;
   double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
+  const bool wide_ = RowPassesAvx2();
   Band &hess_ = b_.hess, &factor_ = b_.factor;
 };
 
@@ -974,6 +999,9 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
   p.bandwidth = bandwidth;
   return true;
 }
+
+bool SetWideRowPasses(bool on) { return wide_row_passes.exchange(on); }
+bool WideRowPasses() { return RowPassesAvx2(); }
 
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
                                     const BandedIpmSettings& settings, const std::vector<double>* warm,

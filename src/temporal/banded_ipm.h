@@ -165,4 +165,12 @@ BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<do
                                     const BandedIpmSettings& settings, const std::vector<double>* warm = nullptr,
                                     BandedIpmWorkspace* workspace = nullptr);
 
+// The passes over the rows go four at a time (AVX2 and FMA) on a processor that has them, else
+// two at a time (SSE2, or scalars). SetWideRowPasses(false) makes every solve after it take the
+// two-row passes anyway (tests compare the two); it returns whether the wide passes were on.
+// Process-wide.
+bool SetWideRowPasses(bool on);
+// Whether solves take the four-row passes now (on and supported).
+bool WideRowPasses();
+
 }  // namespace timeopt::internal
