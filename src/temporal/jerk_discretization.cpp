@@ -451,6 +451,112 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   return true;
 }
 
+// C(n, k) for n < kMaxSmallPoly, exact in doubles.
+double Binomial(int n, int k) {
+  static const std::vector<double> table = [] {
+    constexpr int kN = internal::kMaxSmallPoly;
+    std::vector<double> t(static_cast<size_t>(kN * kN), 0.0);
+    for (int m = 0; m < kN; ++m) {
+      t[static_cast<size_t>(m * kN)] = 1.0;
+      for (int j = 1; j <= m; ++j) {
+        t[static_cast<size_t>(m * kN + j)] = t[static_cast<size_t>((m - 1) * kN + j - 1)] + t[static_cast<size_t>((m - 1) * kN + j)];
+      }
+    }
+    return t;
+  }();
+  return table[static_cast<size_t>(n * internal::kMaxSmallPoly + k)];
+}
+
+// z = x y in Bernstein form: x of degree n, y of degree m, z of degree n + m (n + m + 1 values).
+void BernsteinProduct(const double* x, int n, const double* y, int m, double* z) {
+  for (int k = 0; k <= n + m; ++k) z[k] = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double xi = Binomial(n, i) * x[i];
+    for (int j = 0; j <= m; ++j) z[i + j] += xi * Binomial(m, j) * y[j];
+  }
+  for (int k = 0; k <= n + m; ++k) z[k] /= Binomial(n + m, k);
+}
+
+// The Lagrange basis on u = 0, 1/2, 1 (Basis) in Bernstein form of degree 2, and its derivatives
+// (BasisDerivative) in Bernstein form of degree 1.
+constexpr double kBasisBernstein[3][3] = {{1.0, -0.5, 0.0}, {0.0, 2.0, 0.0}, {0.0, -0.5, 1.0}};
+constexpr double kBasisDerivativeBernstein[3][2] = {{-3.0, 1.0}, {4.0, -4.0}, {-1.0, 3.0}};
+
+// A regular cell's velocity and acceleration rows and jerk templates on axis a: the templates'
+// case of AddCellRows without the quadrotor's limits, the same rows in the same order. Here in
+// Bernstein form throughout: the curve's first three derivatives on the cell (q, p2, p3) are
+// converted once and every row family is a product with the basis, where AddCellRows multiplies
+// power forms and converts each product (about half of the templates' instructions). False, with
+// nothing added, unless the sizes are those of one polynomial and its derivatives with q of
+// degree 2 or more: AddCellRows then writes the rows itself.
+bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const SmallPoly& q, const SmallPoly& p2,
+                             const SmallPoly& p3) {
+  constexpr int kN = internal::kMaxSmallPoly;
+  const int dq = static_cast<int>(q.size()) - 1;
+  if (dq < 2 || p2.size() != dq || p3.size() != dq - 1 || 2 * dq + 3 > kN) return false;
+  const TemporalLimits& limits = c.problem.limits;
+  const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
+  const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
+  const SmallPoly bq = c.bernstein.Convert(q), b2 = c.bernstein.Convert(p2), b3 = c.bernstein.Convert(p3);
+  double w[3][kN], scratch[2][kN];
+  // The rows sign w_i . (b0, bm, b1) <= bound for each coefficient i (both signs when two_sided).
+  const auto rows = [&](int size, bool two_sided, double bound, LinearRow::Kind kind) {
+    for (const double sign : {1.0, -1.0}) {
+      if (sign < 0.0 && !two_sided) break;
+      for (int i = 0; i < size; ++i) {
+        const double v[3] = {sign * w[0][i], sign * w[1][i], sign * w[2][i]};
+        if (v[0] <= 0.0 && v[1] <= 0.0 && v[2] <= 0.0) continue;  // holds for b >= 0
+        internal::GridRow row;
+        row.g0 = g0;
+        row.kind = kind;
+        for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = v[j] / bound;
+        c.templates->cell_rows.push_back(row);
+      }
+    }
+  };
+  if (std::isfinite(vmax2)) {
+    // v^2 = q^2 b, of degree 2 dq + 2.
+    BernsteinProduct(bq.data(), dq, bq.data(), dq, scratch[0]);
+    for (int j = 0; j < 3; ++j) BernsteinProduct(scratch[0], 2 * dq, kBasisBernstein[j], 2, w[j]);
+    rows(2 * dq + 3, false, vmax2, LinearRow::Kind::kVelocity);
+  }
+  if (std::isfinite(amax)) {
+    // q b' / (2 ds) + p2 b, of degree dq + 1.
+    for (int j = 0; j < 3; ++j) {
+      BernsteinProduct(bq.data(), dq, kBasisDerivativeBernstein[j], 1, scratch[0]);
+      BernsteinProduct(b2.data(), dq - 1, kBasisBernstein[j], 2, scratch[1]);
+      for (int i = 0; i <= dq + 1; ++i) w[j][i] = scratch[0][i] / (2.0 * ds) + scratch[1][i];
+    }
+    rows(dq + 2, true, amax, LinearRow::Kind::kAcceleration);
+  }
+  // The jerk's factor q b'' / (2 ds^2) + 3 p2 b' / (2 ds) + p3 b, of degree dq.
+  const int size = dq + 1;
+  for (int j = 0; j < 3; ++j) {
+    BernsteinProduct(b2.data(), dq - 1, kBasisDerivativeBernstein[j], 1, scratch[0]);
+    BernsteinProduct(b3.data(), dq - 2, kBasisBernstein[j], 2, scratch[1]);
+    for (int i = 0; i < size; ++i) {
+      w[j][i] = bq(i) * (kBasisSecond[j] / (2.0 * ds * ds)) + scratch[0][i] * (3.0 / (2.0 * ds)) + scratch[1][i];
+    }
+  }
+  if (c.basis_size != size) {
+    for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
+    c.basis_size = size;
+  }
+  for (const double sign : {1.0, -1.0}) {
+    for (int i = 0; i < size; ++i) {
+      internal::JerkRowTemplate t;
+      t.g0 = g0;
+      t.jmax = jmax;
+      for (int j = 0; j < 3; ++j) {
+        t.a[static_cast<size_t>(j)] = sign * w[j][i];
+        t.basis[static_cast<size_t>(j)] = c.basis_bernstein[j](i);
+      }
+      c.templates->jerk_rows.push_back(t);
+    }
+  }
+  return true;
+}
+
 // The velocity, acceleration and jerk rows of a regular cell (b quadratic in u through its three
 // half-grid values), or of a rest cell given its RestPolys (b = w^4 q, q linear; see above): the
 // same rows over the cell's three values, from the polynomials of each.
@@ -480,6 +586,10 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
   for (int a = 0; a < 3; ++a) {
     const SmallPoly q = c.OnCell(piece, k, 1, a), p2 = c.OnCell(piece, k, 2, a);
     const SmallPoly p3 = c.OnCell(piece, k, 3, a);
+    if (rest == nullptr && c.templates != nullptr && mode == JerkRows::kNone && !quadrotor &&
+        AddRegularAxisTemplates(c, g0, ds, a, q, p2, p3)) {
+      continue;
+    }
     const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
     const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
     SmallPoly vel[3], acc[3], jerk[3];
