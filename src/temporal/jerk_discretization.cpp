@@ -451,10 +451,10 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   return true;
 }
 
-// C(n, k) for n < kMaxSmallPoly, exact in doubles.
-double Binomial(int n, int k) {
+// C(n, k) for n < kMaxSmallPoly, exact in doubles: row n of the table.
+const double* BinomialRow(int n) {
+  constexpr int kN = internal::kMaxSmallPoly;
   static const std::vector<double> table = [] {
-    constexpr int kN = internal::kMaxSmallPoly;
     std::vector<double> t(static_cast<size_t>(kN * kN), 0.0);
     for (int m = 0; m < kN; ++m) {
       t[static_cast<size_t>(m * kN)] = 1.0;
@@ -464,23 +464,50 @@ double Binomial(int n, int k) {
     }
     return t;
   }();
-  return table[static_cast<size_t>(n * internal::kMaxSmallPoly + k)];
+  return table.data() + static_cast<size_t>(n) * kN;
 }
 
-// z = x y in Bernstein form: x of degree n, y of degree m, z of degree n + m (n + m + 1 values).
-void BernsteinProduct(const double* x, int n, const double* y, int m, double* z) {
-  for (int k = 0; k <= n + m; ++k) z[k] = 0.0;
-  for (int i = 0; i <= n; ++i) {
-    const double xi = Binomial(n, i) * x[i];
-    for (int j = 0; j <= m; ++j) z[i + j] += xi * Binomial(m, j) * y[j];
+// z = x^2 in Bernstein form, x of degree n (z of degree 2 n).
+void BernsteinSquare(const double* x, int n, double* z) {
+  const double* cn = BinomialRow(n);
+  const double* c2n = BinomialRow(2 * n);
+  double scaled[internal::kMaxSmallPoly];
+  for (int i = 0; i <= n; ++i) scaled[i] = cn[i] * x[i];
+  for (int k = 0; k <= 2 * n; ++k) {
+    double sum = 0.0;
+    for (int i = std::max(0, k - n); i <= std::min(k, n); ++i) sum += scaled[i] * scaled[k - i];
+    z[k] = sum / c2n[k];
   }
-  for (int k = 0; k <= n + m; ++k) z[k] /= Binomial(n + m, k);
 }
 
 // The Lagrange basis on u = 0, 1/2, 1 (Basis) in Bernstein form of degree 2, and its derivatives
 // (BasisDerivative) in Bernstein form of degree 1.
 constexpr double kBasisBernstein[3][3] = {{1.0, -0.5, 0.0}, {0.0, 2.0, 0.0}, {0.0, -0.5, 1.0}};
 constexpr double kBasisDerivativeBernstein[3][2] = {{-3.0, 1.0}, {4.0, -4.0}, {-1.0, 3.0}};
+
+// z[j] += scale x L_j in Bernstein form for the three basis functions, x of degree n (z of degree
+// n + 2): the product's coefficient k is alpha_k l0 x_k + beta_k l1 x_{k-1} + gamma_k l2 x_{k-2},
+// with C(n, k) / C(n + 2, k), 2 C(n, k - 1) / C(n + 2, k) and C(n, k - 2) / C(n + 2, k).
+void AddTimesBasis(const double* x, int n, double scale, double (*z)[internal::kMaxSmallPoly]) {
+  const double inv = scale / ((n + 2.0) * (n + 1.0));
+  for (int k = 0; k <= n + 2; ++k) {
+    const double a = k <= n ? (n + 2.0 - k) * (n + 1.0 - k) * inv * x[k] : 0.0;
+    const double b = k >= 1 && k - 1 <= n ? 2.0 * k * (n + 2.0 - k) * inv * x[k - 1] : 0.0;
+    const double g = k >= 2 ? k * (k - 1.0) * inv * x[k - 2] : 0.0;
+    for (int j = 0; j < 3; ++j) z[j][k] += kBasisBernstein[j][0] * a + kBasisBernstein[j][1] * b + kBasisBernstein[j][2] * g;
+  }
+}
+
+// z[j] += scale x L_j' likewise (z of degree n + 1): coefficient k is
+// ((n + 1 - k) d0 x_k + k d1 x_{k-1}) / (n + 1).
+void AddTimesBasisDerivative(const double* x, int n, double scale, double (*z)[internal::kMaxSmallPoly]) {
+  const double inv = scale / (n + 1.0);
+  for (int k = 0; k <= n + 1; ++k) {
+    const double p = k <= n ? (n + 1.0 - k) * inv * x[k] : 0.0;
+    const double q = k >= 1 ? k * inv * x[k - 1] : 0.0;
+    for (int j = 0; j < 3; ++j) z[j][k] += kBasisDerivativeBernstein[j][0] * p + kBasisDerivativeBernstein[j][1] * q;
+  }
+}
 
 // A regular cell's velocity and acceleration rows and jerk templates on axis a: the templates'
 // case of AddCellRows without the quadrotor's limits, the same rows in the same order. Here in
@@ -498,7 +525,7 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
   const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
   const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
   const SmallPoly bq = c.bernstein.Convert(q), b2 = c.bernstein.Convert(p2), b3 = c.bernstein.Convert(p3);
-  double w[3][kN], scratch[2][kN];
+  double w[3][kN];
   // The rows sign w_i . (b0, bm, b1) <= bound for each coefficient i (both signs when two_sided).
   const auto rows = [&](int size, bool two_sided, double bound, LinearRow::Kind kind) {
     for (const double sign : {1.0, -1.0}) {
@@ -514,30 +541,31 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
       }
     }
   };
+  const auto clear = [&](int size) {
+    for (int j = 0; j < 3; ++j) std::fill(w[j], w[j] + size, 0.0);
+  };
   if (std::isfinite(vmax2)) {
     // v^2 = q^2 b, of degree 2 dq + 2.
-    BernsteinProduct(bq.data(), dq, bq.data(), dq, scratch[0]);
-    for (int j = 0; j < 3; ++j) BernsteinProduct(scratch[0], 2 * dq, kBasisBernstein[j], 2, w[j]);
+    double q2[kN];
+    BernsteinSquare(bq.data(), dq, q2);
+    clear(2 * dq + 3);
+    AddTimesBasis(q2, 2 * dq, 1.0, w);
     rows(2 * dq + 3, false, vmax2, LinearRow::Kind::kVelocity);
   }
   if (std::isfinite(amax)) {
     // q b' / (2 ds) + p2 b, of degree dq + 1.
-    for (int j = 0; j < 3; ++j) {
-      BernsteinProduct(bq.data(), dq, kBasisDerivativeBernstein[j], 1, scratch[0]);
-      BernsteinProduct(b2.data(), dq - 1, kBasisBernstein[j], 2, scratch[1]);
-      for (int i = 0; i <= dq + 1; ++i) w[j][i] = scratch[0][i] / (2.0 * ds) + scratch[1][i];
-    }
+    clear(dq + 2);
+    AddTimesBasisDerivative(bq.data(), dq, 1.0 / (2.0 * ds), w);
+    AddTimesBasis(b2.data(), dq - 1, 1.0, w);
     rows(dq + 2, true, amax, LinearRow::Kind::kAcceleration);
   }
   // The jerk's factor q b'' / (2 ds^2) + 3 p2 b' / (2 ds) + p3 b, of degree dq.
   const int size = dq + 1;
   for (int j = 0; j < 3; ++j) {
-    BernsteinProduct(b2.data(), dq - 1, kBasisDerivativeBernstein[j], 1, scratch[0]);
-    BernsteinProduct(b3.data(), dq - 2, kBasisBernstein[j], 2, scratch[1]);
-    for (int i = 0; i < size; ++i) {
-      w[j][i] = bq(i) * (kBasisSecond[j] / (2.0 * ds * ds)) + scratch[0][i] * (3.0 / (2.0 * ds)) + scratch[1][i];
-    }
+    for (int i = 0; i < size; ++i) w[j][i] = bq(i) * (kBasisSecond[j] / (2.0 * ds * ds));
   }
+  AddTimesBasisDerivative(b2.data(), dq - 1, 3.0 / (2.0 * ds), w);
+  AddTimesBasis(b3.data(), dq - 2, 1.0, w);
   if (c.basis_size != size) {
     for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
     c.basis_size = size;
