@@ -113,9 +113,9 @@ struct BandedProblem {
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
-  // Appends row . y <= bound, scaled so that the bound is +-1 or 0 (a row without terms: false
-  // when it is violated, else dropped).
-  bool AppendRow(BandedRow row, double bound);
+  // Appends sum_t v[t] y[first + t] <= bound (t < count), scaled so that the bound is +-1 or 0 (a
+  // row without terms: false when it is violated, else dropped).
+  bool AppendRow(int first, int count, const double (&v)[kMaxRowSpan], double bound);
   // The three consecutive grid values g0, g0 + 1, g0 + 2 (a jerk-limited cell) as forms on one
   // window of unknowns, so that a row over them maps to the unknowns by a 3 x kMaxRowSpan product.
   struct CellMap {
