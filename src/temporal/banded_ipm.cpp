@@ -249,8 +249,7 @@ struct RowData {
   double* s = nullptr;
   double* z = nullptr;
   double* rp = nullptr;
-  double* inv_s = nullptr;
-  double* inv_z = nullptr;
+  double* inv_sz = nullptr;  // 1 / (s z)
   double* ds = nullptr;
   double* dz = nullptr;
   const double* v[W] = {};  // the rows' coefficients as columns
@@ -336,7 +335,7 @@ bool RowPassesAvx2() {
 struct BandedIpmWorkspace::Buffers {
   std::vector<RowRun> runs;
   std::vector<int> order, starts;
-  std::vector<double> x, s, z, grad, rd, rp, dx, ds, dz, inv_s, inv_z, gz, g_inv_s, g_cross, g_dz, rhs;
+  std::vector<double> x, s, z, grad, rd, rp, dx, ds, dz, inv_sz, gz, g_inv_s, g_cross, g_dz, rhs;
   std::vector<double> v[kMaxRowSpan];
   std::vector<CellWindow> windows;
   Band hess, factor;
@@ -344,7 +343,7 @@ struct BandedIpmWorkspace::Buffers {
     runs.clear();
     order.clear();
     starts.clear();
-    for (std::vector<double>* u : {&x, &s, &z, &grad, &rd, &rp, &dx, &ds, &dz, &inv_s, &inv_z, &gz, &g_inv_s, &g_cross, &g_dz, &rhs}) {
+    for (std::vector<double>* u : {&x, &s, &z, &grad, &rd, &rp, &dx, &ds, &dz, &inv_sz, &gz, &g_inv_s, &g_cross, &g_dz, &rhs}) {
       u->clear();
     }
     for (std::vector<double>& u : v) u.clear();
@@ -657,8 +656,7 @@ class BandedIpm {
     dx_.assign(static_cast<size_t>(n_ + W), 0.0);
     for (size_t v = 0; v < static_cast<size_t>(n_); ++v) dx_[v] = -rd_[v];
     g_inv_s_.assign(static_cast<size_t>(n_ + W), 0.0);
-    inv_s_.resize(static_cast<size_t>(m_));
-    inv_z_.resize(static_cast<size_t>(m_));
+    inv_sz_.resize(static_cast<size_t>(m_));
     double mu = MatrixPass();
     mu /= m_;
     if (!factor_.Factor()) return false;
@@ -704,8 +702,7 @@ class BandedIpm {
     d.s = s_.data();
     d.z = z_.data();
     d.rp = rp_.data();
-    d.inv_s = inv_s_.data();
-    d.inv_z = inv_z_.data();
+    d.inv_sz = inv_sz_.data();
     d.ds = ds_.data();
     d.dz = dz_.data();
     for (int t = 0; t < W; ++t) d.v[t] = v_[t].data();
@@ -739,7 +736,7 @@ class BandedIpm {
   double Bound(size_t r) const { return p_.h[static_cast<size_t>(order_[r])]; }
   std::vector<double>&x_ = b_.x, &s_ = b_.s, &z_ = b_.z;
   std::vector<double>&grad_ = b_.grad, &rd_ = b_.rd, &rp_ = b_.rp, &dx_ = b_.dx, &ds_ = b_.ds, &dz_ = b_.dz,
-  &inv_s_ = b_.inv_s, &inv_z_ = b_.inv_z;
+  &inv_sz_ = b_.inv_sz;
   // G'z (kept through the steps), and the sums over the rows of one iteration: G' (1 / s),
   // G' (ds_a o dz_a / s), G' dz, and the predictor's right-hand side.
   std::vector<double>&gz_ = b_.gz, &g_inv_s_ = b_.g_inv_s, &g_cross_ = b_.g_cross, &g_dz_ = b_.g_dz, &rhs_ = b_.rhs;
