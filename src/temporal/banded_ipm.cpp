@@ -363,22 +363,31 @@ namespace {
 template <int W>
 class BandedIpm {
  public:
-  BandedIpm(const BandedProblem& p, const BandedIpmSettings& settings, BandedIpmWorkspace::Buffers& buffers)
-      : b_(buffers), p_(p), settings_(settings), n_(p.n), m_(static_cast<int>(p.rows.size())) {
+  BandedIpm(const BandedProblem& p, const std::vector<char>* subset, const BandedIpmSettings& settings,
+            BandedIpmWorkspace::Buffers& buffers)
+      : b_(buffers), p_(p), settings_(settings), n_(p.n) {
     b_.Clear();
-    // The rows past the bounds in order of their first unknown (stable), so that runs are long:
-    // 2,488 runs of 15,474 rows in the order given, 500 sorted, on the first jerk-limited solve at
-    // m = 10, K = 50. The bound rows stay first (row v is -y_v <= 0).
-    // A counting sort by first unknown (stable; a comparison sort was 4% of a plan's temporal stage).
-    const int bounds = std::min(n_, m_);
-    order_.resize(static_cast<size_t>(m_));
-    for (int r = 0; r < bounds; ++r) order_[static_cast<size_t>(r)] = r;
+    // The rows past the bounds (those of `subset`, or all) in order of their first unknown
+    // (stable), so that runs are long: 2,488 runs of 15,474 rows in the order given, 500 sorted,
+    // on the first jerk-limited solve at m = 10, K = 50. The bound rows stay first (row v is
+    // -y_v <= 0). A counting sort by first unknown (a comparison sort was 4% of a plan's temporal
+    // stage).
+    const int all = static_cast<int>(p.rows.size());
+    const int bounds = std::min(n_, all);
+    const auto kept = [&](int r) { return subset == nullptr || (*subset)[static_cast<size_t>(r)] != 0; };
     std::vector<int>& starts = b_.starts;  // rows before those that start at unknown v, then the next free place
     starts.assign(static_cast<size_t>(n_) + 1, 0);
-    for (int r = bounds; r < m_; ++r) ++starts[static_cast<size_t>(p.rows[static_cast<size_t>(r)].first) + 1];
+    for (int r = bounds; r < all; ++r) {
+      if (kept(r)) ++starts[static_cast<size_t>(p.rows[static_cast<size_t>(r)].first) + 1];
+    }
     starts[0] = bounds;
     for (int v = 0; v < n_; ++v) starts[static_cast<size_t>(v) + 1] += starts[static_cast<size_t>(v)];
-    for (int r = bounds; r < m_; ++r) order_[static_cast<size_t>(starts[static_cast<size_t>(p.rows[static_cast<size_t>(r)].first)]++)] = r;
+    m_ = starts[static_cast<size_t>(n_)];
+    order_.resize(static_cast<size_t>(m_));
+    for (int r = 0; r < bounds; ++r) order_[static_cast<size_t>(r)] = r;
+    for (int r = bounds; r < all; ++r) {
+      if (kept(r)) order_[static_cast<size_t>(starts[static_cast<size_t>(p.rows[static_cast<size_t>(r)].first)]++)] = r;
+    }
     // Runs of consecutive rows that start at the same unknown: their sums into the gradient, the
     // right-hand side and the Newton matrix are formed in registers and added once per run (adding
     // each row's terms in memory stalled on store-to-load forwarding).
@@ -421,7 +430,7 @@ class BandedIpm {
   BandedIpmOutcome Run(const std::vector<double>& y0, const std::vector<double>* warm) {
     BandedIpmOutcome out;
     out.kind = BandedIpmOutcome::Kind::kGaveUp;
-    out.rows = m_ - n_;
+    out.rows = m_ - std::min(n_, m_);
     if (warm != nullptr ? !WarmStart(y0, *warm) : !Start(y0)) {
       out.message = "structured path: no start inside the rows that keep b positive";
       return out;
@@ -437,7 +446,7 @@ class BandedIpm {
         out.x.resize(p_.x_form.size());
         for (size_t v = 0; v < out.x.size(); ++v) out.x[v] = p_.x_form[v].Value(x_);
         out.y.assign(x_.begin(), x_.begin() + n_);
-        out.z.resize(static_cast<size_t>(m_));
+        out.z.assign(p_.rows.size(), 0.0);
         for (int r = 0; r < m_; ++r) out.z[static_cast<size_t>(order_[static_cast<size_t>(r)])] = z_[static_cast<size_t>(r)];
         return out;
       }
@@ -808,23 +817,6 @@ void BandedProblem::Clear() {
   kind = -1;
 }
 
-void BandedProblem::AssignWithoutRows(const BandedProblem& from, size_t count) {
-  n = from.n;
-  bandwidth = from.bandwidth;
-  controls = from.controls;
-  cells = from.cells;
-  grid_form = from.grid_form;
-  x_form = from.x_form;
-  cap = from.cap;
-  next_id = from.next_id;
-  kind = from.kind;
-  rows.clear();
-  h.clear();
-  essential.clear();
-  id.clear();
-  Reserve(count);
-}
-
 bool BandedProblem::AppendRow(int first, int count, const double (&v)[kMaxRowSpan], double bound) {
   if (count == 0) return bound >= -1e-9;
   double scale = std::abs(bound);
@@ -1013,20 +1005,27 @@ bool WideRowPasses() { return RowPassesAvx2(); }
 
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
                                     const BandedIpmSettings& settings, const std::vector<double>* warm,
-                                    BandedIpmWorkspace* workspace) {
+                                    BandedIpmWorkspace* workspace, const std::vector<char>* subset) {
   // (A cell's two forms are read into a window of 2 kMaxRowSpan values in Evaluate.)
   if (p.bandwidth > settings.max_bandwidth || p.bandwidth >= 2 * kMaxRowSpan) {
     BandedIpmOutcome out;
     out.message = "half-bandwidth " + std::to_string(p.bandwidth);
     return out;
   }
+  if (subset != nullptr && subset->size() != p.rows.size()) {
+    BandedIpmOutcome out;
+    out.message = "structured path: a row subset of the wrong size";
+    return out;
+  }
   int width = 1;
-  for (const BandedRow& row : p.rows) width = std::max<int>(width, row.count);
+  for (size_t r = 0; r < p.rows.size(); ++r) {
+    if (subset == nullptr || (*subset)[r] != 0) width = std::max<int>(width, p.rows[r].count);
+  }
   BandedIpmWorkspace local;
   BandedIpmWorkspace::Buffers& buffers = (workspace != nullptr ? *workspace : local).buffers();
-  if (width <= 2) return BandedIpm<2>(p, settings, buffers).Run(y0, warm);
-  if (width == 3) return BandedIpm<3>(p, settings, buffers).Run(y0, warm);
-  return BandedIpm<kMaxRowSpan>(p, settings, buffers).Run(y0, warm);
+  if (width <= 2) return BandedIpm<2>(p, subset, settings, buffers).Run(y0, warm);
+  if (width == 3) return BandedIpm<3>(p, subset, settings, buffers).Run(y0, warm);
+  return BandedIpm<kMaxRowSpan>(p, subset, settings, buffers).Run(y0, warm);
 }
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings) {

@@ -57,7 +57,7 @@ struct BandedIpmOutcome {
   std::string message;
   std::vector<double> x;  // d.num_vars values when optimal
   std::vector<double> y;  // the unknowns when optimal
-  std::vector<double> z;  // the rows' multipliers when optimal
+  std::vector<double> z;  // the rows' multipliers when optimal (one per row of the problem)
 };
 
 BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSettings& settings);
@@ -107,9 +107,6 @@ struct BandedProblem {
   void Reserve(size_t count);
   // Back to a default BandedProblem, keeping the vectors' memory.
   void Clear();
-  // from's unknowns, cells and forms without rows (room for `count`): a working set to fill. Keeps
-  // the vectors' memory.
-  void AssignWithoutRows(const BandedProblem& from, size_t count);
   // Appends sum over (free value, coef) <= bound as a row over y; false when it spans more than
   // kMaxRowSpan unknowns or is constant and violated (a constant one that holds is dropped).
   bool AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool essential = false);
@@ -147,11 +144,11 @@ class BandedIpmWorkspace {
 };
 
 // The working memory of the structured sequential convex programme (jerk_solver.cpp): its
-// problem, its working set and the interior-point solver's vectors. A TemporalSolver keeps one
+// problem and the interior-point solver's vectors. A TemporalSolver keeps one
 // from one jerk-limited solve to the next.
 struct SolveWorkspace {
   BandedIpmWorkspace ipm;
-  BandedProblem problem, working_set;
+  BandedProblem problem;
 };
 
 // The structured problem of d (rows, cells and forms); false (not applicable) with a reason.
@@ -161,9 +158,11 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
 // profile alone). On kOptimal, x holds d's free values (through x_form), y the unknowns and z the
 // rows' multipliers. With `warm` (a multiplier per row id, NaN for none: a previous solve of a
 // nearby problem; empty: none yet), the start is y0 itself with those multipliers, re-centred.
+// With `subset` (one flag per row of p), only the flagged rows and the bounds (the first n rows,
+// always) take part; z then holds 0 for the rows left out.
 BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<double>& y0,
                                     const BandedIpmSettings& settings, const std::vector<double>* warm = nullptr,
-                                    BandedIpmWorkspace* workspace = nullptr);
+                                    BandedIpmWorkspace* workspace = nullptr, const std::vector<char>* subset = nullptr);
 
 // The passes over the rows go four at a time (AVX2 and FMA) on a processor that has them, else
 // two at a time (SSE2, or scalars). SetWideRowPasses(false) makes every solve after it take the
