@@ -33,9 +33,9 @@ class TemporalSolver {
   // problem comes back with result.infeasibility, or relaxed (TemporalProblem::relax_boundary).
   //
   // A solver keeps the working memory of its last jerk-limited solve for the next one, whose pages
-  // are then already mapped (a fresh page costs a fault: 10-20% of a solve): about 10 kB per cell,
-  // 4.8 MB at 10 pieces of 50 cells, 9 MB for the default plan (27 pieces of 20). Give each thread
-  // its own solver.
+  // are then already mapped (a fresh page costs a fault: 10-20% of a solve): about 5.5 kB per
+  // cell, 2.8 MB at 10 pieces of 50 cells, 5.7 MB for the default plan (27 pieces of 20). Give
+  // each thread its own solver.
   TemporalResult Solve(const TemporalProblem& problem);
   virtual TemporalBackend backend() const = 0;
 
