@@ -270,12 +270,10 @@ using Wide = Pair;
 
 #if TIMEOPT_AVX2_ROWS
 // The same passes four rows at a time, compiled for AVX2 and FMA (whatever the build's flags);
-// only called where the processor has both (RowPassesAvx2).
-#pragma GCC push_options
-#pragma GCC target("avx2,fma")
+// only called where the processor has both (RowPassesAvx2). Each function names its target
+// itself (TIMEOPT_AVX2): GCC gives a template's instances the options in force where they are
+// instantiated, and Clang has no target pragma.
 namespace avx2 {
-// (Each function says its target itself: GCC does not give the pragma's to functions defined in a
-// class.)
 #define TIMEOPT_AVX2 __attribute__((target("avx2,fma")))
 struct Quad {
   __m256d v;
@@ -313,7 +311,6 @@ using Wide = Quad;
 #undef TIMEOPT_ROWS_TARGET
 }  // namespace avx2
 #undef TIMEOPT_AVX2
-#pragma GCC pop_options
 #endif
 
 // Whether the passes run four rows at a time: on a processor with AVX2 and FMA, unless
