@@ -487,16 +487,23 @@ constexpr double kBasisDerivativeBernstein[3][2] = {{-3.0, 1.0}, {4.0, -4.0}, {-
 
 // z[j] += scale x L_j in Bernstein form for the three basis functions, x of degree n (z of degree
 // n + 2): the product's coefficient k is alpha_k l0 x_k + beta_k l1 x_{k-1} + gamma_k l2 x_{k-2},
-// with C(n, k) / C(n + 2, k), 2 C(n, k - 1) / C(n + 2, k) and C(n, k - 2) / C(n + 2, k).
+// with C(n, k) / C(n + 2, k), 2 C(n, k - 1) / C(n + 2, k) and C(n, k - 2) / C(n + 2, k); with the
+// basis' Bernstein coefficients (kBasisBernstein) that is a - b / 2, 2 b and g - b / 2.
 void AddTimesBasis(const double* x, int n, double scale, double (*z)[internal::kMaxSmallPoly]) {
   const double inv = scale / ((n + 2.0) * (n + 1.0));
   for (int k = 0; k <= n + 2; ++k) {
     const double a = k <= n ? (n + 2.0 - k) * (n + 1.0 - k) * inv * x[k] : 0.0;
     const double b = k >= 1 && k - 1 <= n ? 2.0 * k * (n + 2.0 - k) * inv * x[k - 1] : 0.0;
     const double g = k >= 2 ? k * (k - 1.0) * inv * x[k - 2] : 0.0;
-    for (int j = 0; j < 3; ++j) z[j][k] += kBasisBernstein[j][0] * a + kBasisBernstein[j][1] * b + kBasisBernstein[j][2] * g;
+    z[0][k] += a - 0.5 * b;
+    z[1][k] += 2.0 * b;
+    z[2][k] += g - 0.5 * b;
   }
 }
+static_assert(kBasisBernstein[0][0] == 1.0 && kBasisBernstein[0][1] == -0.5 && kBasisBernstein[0][2] == 0.0 &&
+                  kBasisBernstein[1][0] == 0.0 && kBasisBernstein[1][1] == 2.0 && kBasisBernstein[1][2] == 0.0 &&
+                  kBasisBernstein[2][0] == 0.0 && kBasisBernstein[2][1] == -0.5 && kBasisBernstein[2][2] == 1.0,
+              "AddTimesBasis folds these coefficients");
 
 // z[j] += scale x L_j' likewise (z of degree n + 1): coefficient k is
 // ((n + 1 - k) d0 x_k + k d1 x_{k-1}) / (n + 1).

@@ -236,9 +236,9 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
       jerk ? Eigen::Vector3d(problem.limits.max_jerk->cwiseInverse()) : Eigen::Vector3d::Zero();
   // The quadrotor's limits at one sample (velocity, acceleration).
   const TemporalLimits& L = problem.limits;
+  const bool norms = L.HasNormLimits();
   double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, thrust_min = std::numeric_limits<double>::infinity(), tilt = 0.0;
   const auto quad = [&](const Eigen::Vector3d& vel, const Eigen::Vector3d& acc) {
-    if (!L.HasNormLimits()) return;
     speed = std::max(speed, vel.norm());
     acc_norm = std::max(acc_norm, acc.norm());
     const Eigen::Vector3d thrust = acc + Eigen::Vector3d(0.0, 0.0, L.gravity);
@@ -271,7 +271,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
           const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
           vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
           ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
-          quad(f1 * std::sqrt(b), f1 * a + f2 * b);
+          if (norms) quad(f1 * std::sqrt(b), f1 * a + f2 * b);
           continue;
         }
         // Each cell's own state at both of its ends: the jerk's left and right limits at a grid
@@ -281,7 +281,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
         const double v = p.sdot;
         vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
         ar = std::max(ar, (f1 * p.sddot + f2 * v * v).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
-        quad(f1 * v, f1 * p.sddot + f2 * v * v);
+        if (norms) quad(f1 * v, f1 * p.sddot + f2 * v * v);
         const Eigen::Vector3d jerk_vector = f1 * p.sdddot + 3.0 * f2 * v * p.sddot + f3 * v * v * v;
         jr = std::max(jr, jerk_vector.cwiseAbs().cwiseProduct(inv_j).maxCoeff());
       }
