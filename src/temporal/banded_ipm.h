@@ -78,7 +78,14 @@ struct BandedRow {
     for (int t = 0; t < count; ++t) value += v[t] * y[static_cast<size_t>(first + t)];
     return value;
   }
+  // The same over y padded with kMaxRowSpan - 1 finite values past its end (the terms past `count`
+  // are 0): a fixed number of terms, for the passes over every row.
+  double PaddedValue(const double* y) const {
+    const double* x = y + first;
+    return (v[0] * x[0] + v[1] * x[1]) + (v[2] * x[2] + v[3] * x[3]);
+  }
 };
+static_assert(kMaxRowSpan == 4, "BandedRow::PaddedValue takes four terms");
 struct BandedCell {
   ControlForm b[2];
   double c = 0.0;    // time = c / (sqrt(b0) + sqrt(b1)): 2 ds time_weight

@@ -1075,10 +1075,15 @@ double LinearizationFloor(const std::vector<double>& linearization) {
 
 TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates) {
   *templates = JerkTemplates();
-  // About 45 velocity and acceleration rows and 18 jerk rows per cell on a cubic curve.
+  // Room for a regular cell's rows at the curve's largest degree, so that the vectors never grow
+  // (each growth copied them and touched fresh pages: on the default plan both grew once): with
+  // f' of degree dq, 3 (2 dq + 3) velocity and 6 (dq + 2) acceleration rows at most, and 6 (dq + 1)
+  // jerk templates (a rest cell's two parts take twice that; rest cells are few).
+  int dq = 0;
+  for (int i = 0; i < problem.curve.num_pieces(); ++i) dq = std::max(dq, problem.curve.piece(i).degree() - 1);
   const size_t cells = static_cast<size_t>(problem.curve.num_pieces()) * static_cast<size_t>(problem.cells_per_piece);
-  templates->cell_rows.reserve(48 * cells);
-  templates->jerk_rows.reserve(18 * cells);
+  templates->cell_rows.reserve(static_cast<size_t>(12 * dq + 21) * cells);
+  templates->jerk_rows.reserve(static_cast<size_t>(6 * dq + 6) * cells + 64);
   return DiscretizeJerkLimitedImpl(problem, JerkRows::kNone, nullptr, templates);
 }
 

@@ -318,6 +318,12 @@ TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b
 // The profile's exact time for b at every half-grid value of the jerk-limited d.
 double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) { return ProfileOf(d, b).total_time(); }
 
+// y followed by internal::kMaxRowSpan - 1 zeros, into *out.
+void Padded(const std::vector<double>& y, std::vector<double>* out) {
+  out->assign(y.begin(), y.end());
+  out->resize(y.size() + internal::kMaxRowSpan - 1, 0.0);
+}
+
 // Whether the row has a term over a marked unknown.
 bool TouchesMarked(const internal::BandedRow& row, const std::vector<char>& marked) {
   for (int t = 0; t < row.count; ++t) {
@@ -402,6 +408,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   out->build_seconds += SecondsSince(start);
   const int base_bandwidth = p.bandwidth;
   std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
+  std::vector<double> padded;   // y with zeros past its end, for BandedRow::PaddedValue
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
   if (jerk_aware) z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
@@ -442,9 +449,10 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
     // takes all of them; one from the coarse programme's jerk-limited answer only those near
     // their bound there.
+    Padded(y, &padded);
     for (size_t r = 0; r < p.rows.size(); ++r) {
-      keep[r] = p.essential[r] || (h == 0 && !jerk_aware && r >= static_rows) || p.rows[r].Value(y) >= fraction * p.h[r] ||
-                TouchesMarked(p.rows[r], loose);
+      keep[r] = p.essential[r] || (h == 0 && !jerk_aware && r >= static_rows) ||
+                p.rows[r].PaddedValue(padded.data()) >= fraction * p.h[r] || TouchesMarked(p.rows[r], loose);
     }
     out->build_seconds += SecondsSince(start);
     internal::BandedIpmOutcome outcome;
@@ -492,9 +500,10 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       start = Clock::now();
       // Every row's value at the answer, once per round.
       values.resize(p.rows.size());
+      Padded(outcome.y, &padded);
       double given = 0.0;
       for (size_t r = 0; r < p.rows.size(); ++r) {
-        values[r] = p.rows[r].Value(outcome.y);
+        values[r] = p.rows[r].PaddedValue(padded.data());
         if (keep[r]) given = std::max(given, values[r] - p.h[r]);
       }
       const auto left_out_violated = [&](size_t r) { return !keep[r] && values[r] - p.h[r] > given; };
