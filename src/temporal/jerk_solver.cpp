@@ -101,14 +101,14 @@ constexpr double kCoarseTolerance = 1e-3;
 // The structured path's certified guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
-// Whether the structured path's jerk-free start (when there is no coarse programme: K < 36, as
-// in plans) takes the paper's rows for its guess, not the certified ones: a rougher guess of the
-// same optimum, for a start and working set only. Measured on the default plan (27 pieces, K = 20):
-// the guess took 10 interior-point iterations over 735 rows, not 39 over 1,232, and the first
-// convex solve 21 iterations, not 17; the temporal stage 33.5 ms, not 35.1 ms (medians of 11
-// interleaved runs), T the same to 2e-6 relative. On the 100 m forest: 148.7 ms, not 151.0 ms.
-// With a coarse programme the certified guess stays (the paper's took 34 -> 41 / 37 -> 46 / 40 ->
-// 42 iterations on the benchmark's curves).
+// Whether the structured path's jerk-free start (when there is no coarse programme, K < 36 as in
+// plans, or it did not answer) takes the paper's rows for its guess, not the certified ones: a
+// rougher guess of the same optimum, for a start and working set only. Measured on the default
+// plan (27 pieces, K = 20): the guess took 10 interior-point iterations over 735 rows, not 39
+// over 1,232, and the first convex solve 21 iterations, not 17; the temporal stage 33.5 ms, not
+// 35.1 ms (medians of 11 interleaved runs), T the same to 2e-6 relative. On the 100 m forest:
+// 148.7 ms, not 151.0 ms. With a coarse programme the certified guess stays (the paper's took
+// 34 -> 41 / 37 -> 46 / 40 -> 42 iterations on the benchmark's curves).
 constexpr bool kPaperGuess = true;
 // The relative row and gap tolerance of the structured programme's first solve from the jerk-free
 // guess (its answer is only the next linearization point and start; the stopping tests skip its
