@@ -263,9 +263,10 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
     for (int k = 0; k < K; ++k) {
       const double b0 = profile.b(i, k), b1 = profile.b(i, k + 1);
       const double a = jerk ? 0.0 : profile.a(i, k);
+      const double start = jerk ? profile.CellStart(i, k) : 0.0, length = jerk ? profile.CellLength(i, k) : 0.0;
       for (int j = 0; j <= samples_per_cell; ++j) {
         const double u = static_cast<double>(j) / samples_per_cell;
-        const double s = jerk ? profile.CellStart(i, k) + u * profile.CellLength(i, k) : (k + u) * ds;
+        const double s = jerk ? start + u * length : (k + u) * ds;
         const Eigen::Vector3d f1 = horner(d1, s), f2 = horner(d2, s);
         if (!jerk) {
           const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
@@ -276,7 +277,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
         }
         // Each cell's own state at both of its ends: the jerk's left and right limits at a grid
         // point (AtS would evaluate the next cell at this cell's end), and no search for the cell.
-        const TemporalProfile::Point p = profile.InCell(i, k, u * profile.CellLength(i, k));
+        const TemporalProfile::Point p = profile.InCell(i, k, u * length);
         const Eigen::Vector3d f3 = horner(d3, s);
         const double v = p.sdot;
         vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
