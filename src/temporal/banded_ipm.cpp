@@ -1016,7 +1016,14 @@ BandedIpmOutcome SolveBandedProblem(const BandedProblem& p, const std::vector<do
   }
   int width = 1;
   for (size_t r = 0; r < p.rows.size(); ++r) {
-    if (subset == nullptr || (*subset)[r] != 0) width = std::max<int>(width, p.rows[r].count);
+    const BandedRow& row = p.rows[r];
+    // (BandedIpm orders the rows by their first unknown through a table over the unknowns.)
+    if (row.first < 0 || row.first + std::max<int>(row.count, 1) > p.n) {
+      BandedIpmOutcome out;
+      out.message = "structured path: a row outside the unknowns";
+      return out;
+    }
+    if (subset == nullptr || (*subset)[r] != 0) width = std::max<int>(width, row.count);
   }
   BandedIpmWorkspace local;
   BandedIpmWorkspace::Buffers& buffers = (workspace != nullptr ? *workspace : local).buffers();
