@@ -451,35 +451,6 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   return true;
 }
 
-// C(n, k) for n < kMaxSmallPoly, exact in doubles: row n of the table.
-const double* BinomialRow(int n) {
-  constexpr int kN = internal::kMaxSmallPoly;
-  static const std::vector<double> table = [] {
-    std::vector<double> t(static_cast<size_t>(kN * kN), 0.0);
-    for (int m = 0; m < kN; ++m) {
-      t[static_cast<size_t>(m * kN)] = 1.0;
-      for (int j = 1; j <= m; ++j) {
-        t[static_cast<size_t>(m * kN + j)] = t[static_cast<size_t>((m - 1) * kN + j - 1)] + t[static_cast<size_t>((m - 1) * kN + j)];
-      }
-    }
-    return t;
-  }();
-  return table.data() + static_cast<size_t>(n) * kN;
-}
-
-// z = x^2 in Bernstein form, x of degree n (z of degree 2 n).
-void BernsteinSquare(const double* x, int n, double* z) {
-  const double* cn = BinomialRow(n);
-  const double* c2n = BinomialRow(2 * n);
-  double scaled[internal::kMaxSmallPoly];
-  for (int i = 0; i <= n; ++i) scaled[i] = cn[i] * x[i];
-  for (int k = 0; k <= 2 * n; ++k) {
-    double sum = 0.0;
-    for (int i = std::max(0, k - n); i <= std::min(k, n); ++i) sum += scaled[i] * scaled[k - i];
-    z[k] = sum / c2n[k];
-  }
-}
-
 // The Lagrange basis on u = 0, 1/2, 1 (Basis) in Bernstein form of degree 2, and its derivatives
 // (BasisDerivative) in Bernstein form of degree 1.
 constexpr double kBasisBernstein[3][3] = {{1.0, -0.5, 0.0}, {0.0, 2.0, 0.0}, {0.0, -0.5, 1.0}};
@@ -518,7 +489,7 @@ void AddTimesBasisDerivative(const double* x, int n, double scale, double (*z)[i
 
 // A regular cell's velocity and acceleration rows and jerk templates on axis a: the templates'
 // case of AddCellRows without the quadrotor's limits, the same rows in the same order. Here in
-// Bernstein form throughout: the curve's first three derivatives on the cell (q, p2, p3) are
+// Bernstein form: the curve's first three derivatives on the cell (q, p2, p3) and q^2 are
 // converted once and every row family is a product with the basis, where AddCellRows multiplies
 // power forms and converts each product (about half of the templates' instructions). False, with
 // nothing added, unless the sizes are those of one polynomial and its derivatives with q of
@@ -553,10 +524,9 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
   };
   if (std::isfinite(vmax2)) {
     // v^2 = q^2 b, of degree 2 dq + 2.
-    double q2[kN];
-    BernsteinSquare(bq.data(), dq, q2);
+    const SmallPoly q2 = c.bernstein.Convert(Multiply(q, q));
     clear(2 * dq + 3);
-    AddTimesBasis(q2, 2 * dq, 1.0, w);
+    AddTimesBasis(q2.data(), 2 * dq, 1.0, w);
     rows(2 * dq + 3, false, vmax2, LinearRow::Kind::kVelocity);
   }
   if (std::isfinite(amax)) {

@@ -21,8 +21,9 @@
 //
 // The SOCP backend first tries the structured path (SolveStructuredScp below): the same programme
 // over the control values of ControlBasis, which satisfy the equality rows by construction, with
-// banded interior-point solves, the first one linearized at the certified guess (no jerk-free
-// solve) and each later one warm-started. Only when it does not answer does the general path
+// banded interior-point solves, the first one linearized at a jerk-free guess or at the answer of
+// the same programme on a coarser grid (no jerk-free solve on the full grid) and each later one
+// warm-started. Only when it does not answer does the general path
 // above run.
 
 #include <algorithm>
@@ -98,18 +99,9 @@ constexpr int kMinCoarseCells = 12;
 // 291.7 M at 1e-4, 67.4 M / 139.7 M / 287.2 M at 1e-3 (T the same to 1.2e-8), and at 1e-2 the
 // fine solve at m = 20 missed rows (181.1 M).
 constexpr double kCoarseTolerance = 1e-3;
-// The structured path's certified guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
+// The structured path's jerk-free guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
-// Whether the structured path's jerk-free start (when there is no coarse programme, K < 36 as in
-// plans, or it did not answer) takes the paper's rows for its guess, not the certified ones: a
-// rougher guess of the same optimum, for a start and working set only. Measured on the default
-// plan (27 pieces, K = 20): the guess took 10 interior-point iterations over 735 rows, not 39
-// over 1,232, and the first convex solve 21 iterations, not 17; the temporal stage 33.5 ms, not
-// 35.1 ms (medians of 11 interleaved runs), T the same to 2e-6 relative. On the 100 m forest:
-// 148.7 ms, not 151.0 ms. With a coarse programme the certified guess stays (the paper's took
-// 34 -> 41 / 37 -> 46 / 40 -> 42 iterations on the benchmark's curves).
-constexpr bool kPaperGuess = true;
 // The relative row and gap tolerance of the structured programme's first solve from the jerk-free
 // guess (its answer is only the next linearization point and start; the stopping tests skip its
 // T). Measured at 1e-5 / 1e-3 / 1e-2 (convex solves' rows x iterations, summed): the default plan
@@ -318,8 +310,8 @@ TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b
 // The profile's exact time for b at every half-grid value of the jerk-limited d.
 double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) { return ProfileOf(d, b).total_time(); }
 
-// y followed by internal::kMaxRowSpan - 1 zeros, into *out.
-void Padded(const std::vector<double>& y, std::vector<double>* out) {
+// y followed by internal::kMaxRowSpan - 1 zeros, into *out (for BandedRow::PaddedValue).
+void PadForRows(const std::vector<double>& y, std::vector<double>* out) {
   out->assign(y.begin(), y.end());
   out->resize(y.size() + internal::kMaxRowSpan - 1, 0.0);
 }
@@ -449,7 +441,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
     // takes all of them; one from the coarse programme's jerk-limited answer only those near
     // their bound there.
-    Padded(y, &padded);
+    PadForRows(y, &padded);
     for (size_t r = 0; r < p.rows.size(); ++r) {
       keep[r] = p.essential[r] || (h == 0 && !jerk_aware && r >= static_rows) ||
                 p.rows[r].PaddedValue(padded.data()) >= fraction * p.h[r] || TouchesMarked(p.rows[r], loose);
@@ -500,7 +492,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       start = Clock::now();
       // Every row's value at the answer, once per round.
       values.resize(p.rows.size());
-      Padded(outcome.y, &padded);
+      PadForRows(outcome.y, &padded);
       double given = 0.0;
       for (size_t r = 0; r < p.rows.size(); ++r) {
         values[r] = p.rows[r].PaddedValue(padded.data());
@@ -584,20 +576,20 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   int iterations = 0;
   std::vector<double> history;
 
-  // The free values of `d` (the jerk-limited grid) from the jerk-free certified optimum on the
-  // paper's grid (b linear per cell, interpolated): a cheap guess of the jerk-free answer, which
-  // chooses the first solve's working set. Empty when that problem has no answer. With `paper`,
-  // the optimum under the paper's rows instead (kPaperGuess).
-  const auto certified_guess = [&](const TemporalDiscretization& d, int guess_cells, bool paper = false) {
+  // The free values of `d` (the jerk-limited grid) from the jerk-free optimum on the paper's grid
+  // with the rows of `mode` (paper or certified; b linear per cell, interpolated): a cheap guess of
+  // the jerk-free answer, which chooses the first solve's working set. Empty when that problem has
+  // no answer.
+  const auto jerk_free_guess = [&](const TemporalDiscretization& d, int guess_cells, ConstraintMode mode) {
     std::vector<double> x;
     const Clock::time_point start = Clock::now();
-    TemporalProblem certified = problem;
-    certified.limits.max_jerk.reset();
-    certified.constraint_mode = paper ? ConstraintMode::kPaper : ConstraintMode::kCertified;
-    certified.cells_per_piece = guess_cells;
+    TemporalProblem jerk_free = problem;
+    jerk_free.limits.max_jerk.reset();
+    jerk_free.constraint_mode = mode;
+    jerk_free.cells_per_piece = guess_cells;
     TemporalDiscretization cd;
     try {
-      cd = Discretize(certified);
+      cd = Discretize(jerk_free);
     } catch (const std::exception&) {
       return x;
     }
@@ -672,7 +664,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     // structured path over the control values already had its turn).
     d.controls.reset();
     if (rows == JerkRows::kNone && d.num_vars > 0) {
-      guess = certified_guess(d, problem.cells_per_piece);
+      guess = jerk_free_guess(d, problem.cells_per_piece, ConstraintMode::kCertified);
       if (!guess.empty()) previous = &guess;
     }
     // How near its bound a row must be to enter the working set depends on how far the answer may
@@ -826,7 +818,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       }
       if (!dc.controls || dc.infeasible_reason || dc.num_vars == 0) return b;
       BoundByPointVelocity(coarse, &dc);
-      const std::vector<double> guess = certified_guess(dc, std::max(2, (coarse_cells + 1) / kGuessCoarsening));
+      const std::vector<double> guess =
+          jerk_free_guess(dc, std::max(2, (coarse_cells + 1) / kGuessCoarsening), ConstraintMode::kCertified);
       if (guess.empty()) return b;
       StructuredScp scp;
       // Its answer is only a linearization point: loose tolerances (kCoarseTolerance).
@@ -870,7 +863,15 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       // The guess on a coarser grid: it only chooses the first linearization, start and working
       // set.
       const auto jerk_free_start = [&]() {
-        const std::vector<double> guess = certified_guess(d, std::max(2, (problem.cells_per_piece + 1) / kGuessCoarsening), kPaperGuess);
+        // Under the paper's rows, a rougher guess of the same optimum. Measured on the default plan
+        // (27 pieces, K = 20): the guess took 10 interior-point iterations over 735 rows, not 39
+        // over 1,232 with the certified rows, and the first convex solve 21 iterations, not 17; the
+        // temporal stage 33.5 ms, not 35.1 ms (medians of 11 interleaved runs), T the same to 2e-6
+        // relative; the 100 m forest 148.7 ms, not 151.0 ms. The coarse programme above keeps the
+        // certified guess (the paper's took 34 -> 41 / 37 -> 46 / 40 -> 42 iterations on the
+        // benchmark's curves).
+        const std::vector<double> guess =
+            jerk_free_guess(d, std::max(2, (problem.cells_per_piece + 1) / kGuessCoarsening), ConstraintMode::kPaper);
         return guess.empty() ? std::vector<double>() : GridValues(d, guess);
       };
       if (!jerk_aware) first = jerk_free_start();
