@@ -70,8 +70,23 @@ constexpr double kLinearizationFloor = 1e-4;
 // gaps of 0 (no halving), 0.8, 0.9 and 0.95 (on the curve that it halves most, +1.10% at K = 50,
 // against +1.21 / +1.03 / +1.20%; no curve worse than with 0.95). 1 on a line: no halving there.
 constexpr double kRestJerkShare = 0.9;
-// The growth of the cells after a halved rest cell (CellEdges). Against the same reference, growth
-// by 1.25 / 1.5 / 2 left the curve halved most at +0.77 / +0.87 / +1.14% (K = 50).
+// A rest cell is halved as well while the jerk of a constant s-jerk somewhere on it, over the axes,
+// is below this share of its largest value on the cell (RestJerkShares::lowest): there the optimum
+// raises its s-jerk, which a rest cell's profile follows only so far. Against the same reference,
+// this took the quintic whose start eases off most (its jerk falls to 45%) from +1.27% to +0.46%
+// at K = 50; 0.5 left another curve at +0.77%, 0.7 at +0.56%.
+constexpr double kRestJerkSlack = 0.7;
+// A rest cell on a curve (either share below this) is at most one nominal cell long, so that T
+// converges as K grows: a rest cell's profile has two degrees of freedom whatever K is. Lines keep
+// their cells (a constant s-jerk is exact there).
+constexpr double kCurvedRestShare = 0.95;
+// The ratio of consecutive cell edges, in s, after a graded rest cell (CellEdges): in a regular cell
+// the s-jerk is proportional to sdot, which grows like s^(2/3) along a ramp from rest, so a cell
+// that spans a ratio r of s holds its jerk at about r^(-2/3) of its end's at its start. Against the
+// same reference, 1.2 / 1.25 / 1.3 / 1.4 left the worst curve at K = 50 at +0.70 / +0.73 / +0.70 /
+// +0.70% and 8 / 9 / 9 / 9 curves within 0.5%; 1.1 and 1.15 took too many of the K cells (+1.17,
+// +0.94%). Cells growing by 1.25 in length (edges whose ratio falls from 2.25 towards 1.25), as
+// before, left +0.81% and 8.
 constexpr double kRestGrading = 1.25;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
@@ -823,14 +838,21 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
 
 // A rest cell of length h at the start (end = false) or end of piece i with a constant s-jerk: per
 // axis its jerk is b1^1.5 (f' 2 / (9 h^2) +- f'' 2 sigma^3 / h + f''' sigma^6) (see
-// AddConstantJerkRestRows). The largest value over the axes at the rest point (sigma = 0) over the
-// largest anywhere on the cell, each relative to the axis' limit: 1 on a line, less where the
-// curvature makes the jerk grow through the cell, so that the start keeps only that share of its
-// jerk limit. Sampled at 33 points (it only sizes the cell; the rows bound the jerk exactly).
-double RestJerkShare(const TemporalProblem& p, int piece, bool end, double h) {
+// AddConstantJerkRestRows). Each relative to the axis' limit, and taken over the axes at a point:
+// at the rest point (sigma = 0) and its lowest value anywhere on the cell, both over its largest
+// value anywhere on the cell. On a line both are 1. Where the curvature makes the jerk grow through
+// the cell, the start keeps only the share at_rest of its jerk limit; where it makes the jerk fall,
+// the optimum raises its s-jerk there. Sampled at 33 points (they only size the cell; the rows bound
+// the jerk exactly).
+struct RestJerkShares {
+  double at_rest = 1.0;
+  double lowest = 1.0;
+};
+RestJerkShares RestJerkShare(const TemporalProblem& p, int piece, bool end, double h) {
   const double sign = end ? -1.0 : 1.0;
-  double at_rest = 0.0, largest = 0.0;
+  double at_rest = 0.0, largest = 0.0, lowest = kInf;
   for (int q = 0; q <= 32; ++q) {
+    double here = 0.0;
     const double sigma = q / 32.0, sigma3 = sigma * sigma * sigma;
     const double s = end ? 1.0 - h * sigma3 : h * sigma3;
     const Eigen::Vector3d f1 = p.curve.Evaluate(piece, s, 1), f2 = p.curve.Evaluate(piece, s, 2);
@@ -839,10 +861,17 @@ double RestJerkShare(const TemporalProblem& p, int piece, bool end, double h) {
       const double jerk = std::abs(f1(a) * 2.0 / (9.0 * h * h) + sign * f2(a) * 2.0 * sigma3 / h + f3(a) * sigma3 * sigma3);
       const double share = jerk / (*p.limits.max_jerk)(a);
       largest = std::max(largest, share);
-      if (q == 0) at_rest = std::max(at_rest, share);
+      here = std::max(here, share);
     }
+    if (q == 0) at_rest = here;
+    lowest = std::min(lowest, here);
   }
-  return largest > 0.0 ? at_rest / largest : 1.0;
+  RestJerkShares r;
+  if (largest > 0.0) {
+    r.at_rest = at_rest / largest;
+    r.lowest = lowest / largest;
+  }
+  return r;
 }
 
 // Cell edges of a piece in [0, 1]: K cells, with a rest cell at an end that is a rest point sized
@@ -906,38 +935,47 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
 
 // The rest cell at the start (end = false) or end of piece i: the ramp from rest (RampLength),
 // halved (at most 5 times) until a constant s-jerk over it keeps at least kRestJerkShare of the
-// jerk limit at the rest point (on a curve the terms of f'' and f''' grow through the cell).
+// jerk limit at the rest point (on a curve the terms of f'' and f''' grow through the cell) and
+// nowhere less than kRestJerkSlack of its largest value (where they fall, the optimum's s-jerk
+// grows).
 struct RestSize {
   double cell = 0.0;  // the rest cell's length in s (0: none)
   bool halved = false;
+  bool curved = false;  // a constant s-jerk over the cell keeps less than kCurvedRestShare somewhere
 };
 RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_to_rest) {
   RestSize r;
   r.cell = RampLength(p, piece, end, rest_to_rest);
   if (!(r.cell > 0.0)) return r;
-  for (int halving = 0; halving < 5 && RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell)) < kRestJerkShare;
+  RestJerkShares shares = RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell));
+  for (int halving = 0; halving < 5 && (shares.at_rest < kRestJerkShare || shares.lowest < kRestJerkSlack);
        ++halving) {
     r.cell *= 0.5;
     r.halved = true;
+    shares = RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell));
   }
+  r.curved = std::min(shares.at_rest, shares.lowest) < kCurvedRestShare;
   return r;
 }
 
 std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize& rest_end) {
   const double ds = 1.0 / K;
-  // The cells of one end, from the rest point on. A rest cell halved below its ramp (RestSize) is
-  // followed by cells growing by kRestGrading up to the nominal cell, which carry on the ramp
-  // (sdot grows like the time squared there, and a cell whose ends differ much in sdot holds its
-  // jerk well below the limit at its start). Otherwise, a ramp of at least half a nominal cell gets
-  // one rest cell of its length (at most a quarter of the piece); a shorter one h, h, 2 h, ...,
-  // 2^(n-1) h with the last one widened so that they sum to ds. At most K / 3 cells per end.
+  // The cells of one end, from the rest point on. A rest cell halved below its ramp (RestSize), or
+  // one on a curve longer than a nominal cell and cut to one, is followed by cells whose edges grow
+  // by kRestGrading up to the nominal cell, which carry on the ramp (sdot grows like the time
+  // squared there, and a cell whose ends differ much in sdot holds its jerk well below the limit at
+  // its start). Otherwise, a ramp of at least half a nominal cell gets one rest cell of its length
+  // (at most a quarter of the piece); a shorter one h, h, 2 h, ..., 2^(n-1) h with the last one
+  // widened so that they sum to ds. At most K / 3 cells per end.
   const auto graded = [&](const RestSize& rest) {
     std::vector<double> g;
     double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
-    if (rest.halved) {
-      g.push_back(std::min(std::max(h, kSmallestRestCell * ds), kLargestRestCell));
-      for (double next = g.back() * kRestGrading; next < ds && static_cast<int>(g.size()) < K / 3; next *= kRestGrading) {
+    if (rest.halved || (rest.curved && h > ds)) {
+      g.push_back(std::min({std::max(h, kSmallestRestCell * ds), ds, kLargestRestCell}));
+      // Cells from edge e to kRestGrading e: each kRestGrading - 1 times the s already covered.
+      for (double next = g.back() * (kRestGrading - 1.0); next < ds && static_cast<int>(g.size()) < K / 3;
+           next *= kRestGrading) {
         g.push_back(next);
       }
       return g;
