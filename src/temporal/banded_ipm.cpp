@@ -859,11 +859,13 @@ bool BandedProblem::MapCell(int g0, CellMap* map) const {
 }
 
 bool BandedProblem::AddCellRow(const CellMap& map, const double* coef, double bound) {
-  double v[kMaxRowSpan] = {};
-  for (int j = 0; j < 3; ++j) {
-    bound -= coef[j] * map.constant[j];
-    for (int t = 0; t < kMaxRowSpan; ++t) v[t] += coef[j] * map.m[j][t];
-  }
+  const double c0 = coef[0], c1 = coef[1], c2 = coef[2];
+  bound -= c0 * map.constant[0];
+  bound -= c1 * map.constant[1];
+  bound -= c2 * map.constant[2];
+  // Each term in one expression (summed through v in memory, the loop did not vectorize).
+  double v[kMaxRowSpan];
+  for (int t = 0; t < kMaxRowSpan; ++t) v[t] = c0 * map.m[0][t] + c1 * map.m[1][t] + c2 * map.m[2][t];
   // Terms that cancel leave the window as it is: a zero coefficient costs nothing.
   return AppendRow(map.first, map.count, v, bound);
 }

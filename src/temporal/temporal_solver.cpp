@@ -246,6 +246,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
     thrust_min = std::min(thrust_min, thrust.norm());
     tilt = std::max(tilt, std::atan2(thrust.head<2>().norm(), thrust(2)));
   };
+  std::vector<TemporalProfile::Point> states(jerk ? static_cast<size_t>(samples_per_cell) + 1 : 0);
   for (int i = 0; i < profile.num_pieces(); ++i) {
     // The derivatives' coefficients once per piece, then Horner's rule per sample: finishing a
     // result at m = 10, K = 50 took 0.27 ms (of a 6.3 ms Solve) when the piece derived its
@@ -264,6 +265,9 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
       const double b0 = profile.b(i, k), b1 = profile.b(i, k + 1);
       const double a = jerk ? 0.0 : profile.a(i, k);
       const double start = jerk ? profile.CellStart(i, k) : 0.0, length = jerk ? profile.CellLength(i, k) : 0.0;
+      // Each cell's own state at both of its ends: the jerk's left and right limits at a grid
+      // point (AtS would evaluate the next cell at this cell's end), and no search for the cell.
+      if (jerk) profile.InCellSamples(i, k, samples_per_cell, states.data());
       for (int j = 0; j <= samples_per_cell; ++j) {
         const double u = static_cast<double>(j) / samples_per_cell;
         const double s = jerk ? start + u * length : (k + u) * ds;
@@ -275,9 +279,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
           if (norms) quad(f1 * std::sqrt(b), f1 * a + f2 * b);
           continue;
         }
-        // Each cell's own state at both of its ends: the jerk's left and right limits at a grid
-        // point (AtS would evaluate the next cell at this cell's end), and no search for the cell.
-        const TemporalProfile::Point p = profile.InCell(i, k, u * length);
+        const TemporalProfile::Point& p = states[static_cast<size_t>(j)];
         const Eigen::Vector3d f3 = horner(d3, s);
         const double v = p.sdot;
         vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());

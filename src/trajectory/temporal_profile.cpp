@@ -482,6 +482,25 @@ TemporalProfile::Point TemporalProfile::StateInCell(int piece, int k, double sig
   return p;
 }
 
+void TemporalProfile::InCellSamples(int piece, int k, int n, Point* out) const {
+  if (shape(piece, k) != CellShape::kQuadratic) {
+    for (int j = 0; j <= n; ++j) out[j] = StateInCell(piece, k, (static_cast<double>(j) / n) * CellLength(piece, k));
+    return;
+  }
+  // StateInCell's quadratic case with the cell formed once (the dense check's samples).
+  const double ds = CellLength(piece, k), start = CellStart(piece, k);
+  const QuadraticCell cell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1], half_b_[piece][2 * k + 2], ds);
+  for (int j = 0; j <= n; ++j) {
+    const double sigma = std::clamp((static_cast<double>(j) / n) * ds, 0.0, ds);
+    Point& p = out[j];
+    p.piece = piece;
+    p.s = std::min(start + sigma, 1.0);
+    p.sdot = std::sqrt(cell.B(sigma));
+    p.sddot = 0.5 * cell.Slope(sigma);
+    p.sdddot = cell.c2 * p.sdot;
+  }
+}
+
 double TemporalProfile::TimeAtS(int piece, double s) const {
   int k = 0;
   double sigma = 0.0;

@@ -126,6 +126,10 @@ class TemporalProfile {
   // starts there): the left and right limits at a grid point where the jerk steps. Piece and cell
   // must be in range (0 <= k < cells_per_piece()); not checked.
   Point InCell(int piece, int k, double sigma) const { return StateInCell(piece, k, sigma); }
+  // InCell at the n + 1 evenly spaced sigma = (j / n) CellLength(piece, k), j = 0 .. n, into
+  // out[0 .. n], the cell's own formulas set up once (the same values as n + 1 calls of InCell).
+  // n >= 1 and out must hold n + 1 points; not checked.
+  void InCellSamples(int piece, int k, int n, Point* out) const;
 
   // A rest cell's q at its rest point (alpha, see the header comment) from b at its middle in s and
   // at its far end, and back: q is linear in w and b = w^4 q, with w^3 = 1/2 at the middle.
