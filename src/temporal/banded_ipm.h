@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "discretization_internal.h"
 #include "timeopt/temporal/discretization.h"
 
 namespace timeopt::internal {
@@ -151,11 +152,13 @@ class BandedIpmWorkspace {
 };
 
 // The working memory of the structured sequential convex programme (jerk_solver.cpp): its
-// problem and the interior-point solver's vectors. A TemporalSolver keeps one
-// from one jerk-limited solve to the next.
+// problem, its rows' templates and states, and the interior-point solver's vectors. A TemporalSolver keeps
+// one from one jerk-limited solve to the next, so that their pages are mapped already.
 struct SolveWorkspace {
   BandedIpmWorkspace ipm;
   BandedProblem problem;
+  JerkTemplates templates, coarse_templates;  // of the grid and of the coarse programme's grid
+  std::vector<char> row_state;  // per template row: waiting, in the problem, or none
 };
 
 // The structured problem of d (rows, cells and forms); false (not applicable) with a reason.

@@ -364,8 +364,9 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // and acceleration templates, and the jerk rows of each linearization), go into p only when a
   // solve takes them: on the benchmark's curves (m = 10, K = 50) a solve took 6,340 of 24,553
   // velocity and acceleration rows and 978 of 9,141 jerk rows, and building every one of them was
-  // 10% of the whole solve. The others wait as candidates, tested at each answer on the grid
-  // values. Ids: d's rows first, then the cell rows, then the jerk rows (z_by_id, PredictedGain).
+  // 10% of the whole solve. The others wait, tested at each answer on the grid values straight
+  // from their templates (a list of them, written and read again, cost more than it saved). Ids:
+  // d's rows first, then the cell rows, then the jerk rows (z_by_id, PredictedGain).
   const size_t cell_rows = templates.cell_rows.size();
   // Room for every row at once: one allocation, not a copy of ~1 MB per growth.
   p.Reserve(p.rows.size() + cell_rows + templates.jerk_rows.size());
@@ -389,23 +390,27 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   for (const internal::BandedRow& row : p.rows) p.bandwidth = std::max(p.bandwidth, row.count - 1);
   const size_t d_rows = p.rows.size();
   const size_t static_rows = d_rows + cell_rows;  // in ids
-  // A cell row not (yet) in p: its id, cell, coefficients and unscaled bound H = 1 - sum_j coef[j]
-  // constant_j over its free part (p scales a row by 1 / |H|; H <= 0 makes it essential).
-  struct Candidate {
-    size_t id;
-    int g0;
-    std::array<double, 3> coef;
-    double H;
-  };
-  std::vector<Candidate> candidates;
-  // b minus its constant part at every grid value, for y (the candidates' values).
-  std::vector<double> free_b(d.grid.size());
+  // Each cell row's state this round (by id - d_rows): waiting, in p, or none (a jerk row that
+  // holds for every b >= 0).
+  enum : char { kWaiting = 0, kInP = 1, kNone = 2 };
+  std::vector<char>& state = workspace->row_state;
+  state.assign(cell_rows + templates.jerk_rows.size(), kWaiting);
+  size_t waiting = 0;
+  // The constant part of b at every grid value, and its free part at some y (the rows' values).
+  std::vector<double> constant(d.grid.size()), free_b(d.grid.size());
+  for (size_t g = 0; g < d.grid.size(); ++g) constant[g] = p.grid_form[g].constant;
   const auto set_free_b = [&](const std::vector<double>& yy) {
-    for (size_t g = 0; g < d.grid.size(); ++g) free_b[g] = p.grid_form[g].Value(yy) - p.grid_form[g].constant;
+    for (size_t g = 0; g < d.grid.size(); ++g) free_b[g] = p.grid_form[g].Value(yy) - constant[g];
   };
-  const auto candidate_value = [&](const Candidate& c) {
-    const size_t g = static_cast<size_t>(c.g0);
-    return c.coef[0] * free_b[g] + c.coef[1] * free_b[g + 1] + c.coef[2] * free_b[g + 2];
+  // A row's free part at that y, and H = 1 - sum_j coef[j] constant_j, the bound of its free part
+  // (AppendRow scales a row by 1 / |H|; H <= 0 makes it essential).
+  const auto row_value = [&](int g0, const std::array<double, 3>& coef) {
+    const size_t g = static_cast<size_t>(g0);
+    return coef[0] * free_b[g] + coef[1] * free_b[g + 1] + coef[2] * free_b[g + 2];
+  };
+  const auto row_bound = [&](int g0, const std::array<double, 3>& coef) {
+    const size_t g = static_cast<size_t>(g0);
+    return 1.0 - coef[0] * constant[g] - coef[1] * constant[g + 1] - coef[2] * constant[g + 2];
   };
   const auto touches = [&](const internal::BandedProblem::CellMap& map, const std::vector<char>& marked) {
     for (int t = 0; t < map.count; ++t) {
@@ -413,22 +418,41 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     }
     return false;
   };
-  // Puts candidate c into p (kept by the solves); false when it spans too many control values or
-  // is constant and violated.
+  // Puts row `id` into p (kept by the solves); false when it spans too many control values or is
+  // constant and violated.
   std::vector<char> keep;
-  const auto materialize = [&](const Candidate& c) {
-    const internal::BandedProblem::CellMap* map = map_cell(c.g0);
+  const auto materialize = [&](size_t id, int g0, const std::array<double, 3>& coef) {
+    const internal::BandedProblem::CellMap* map = map_cell(g0);
     if (map == nullptr) return false;
-    p.kind = static_cast<int>(c.id < static_rows ? templates.cell_rows[c.id - d_rows].kind : LinearRow::Kind::kJerk);
-    p.next_id = static_cast<int>(c.id);
+    p.kind = static_cast<int>(id < static_rows ? templates.cell_rows[id - d_rows].kind : LinearRow::Kind::kJerk);
+    p.next_id = static_cast<int>(id);
     const size_t before = p.rows.size();
-    if (!p.AddCellRow(*map, c.coef.data(), 1.0)) return false;
+    if (!p.AddCellRow(*map, coef.data(), 1.0)) return false;
     if (p.rows.size() > before) {
       p.bandwidth = std::max(p.bandwidth, p.rows.back().count - 1);
       keep.push_back(1);
     }
+    state[id - d_rows] = kInP;
+    --waiting;
     return true;
   };
+  // f(id, g0, coef) for every waiting row, the jerk rows linearized at `at`; f returns false to
+  // stop (an error), and so does this.
+  const auto for_each_waiting = [&](const std::vector<double>& at, auto&& f) {
+    for (size_t ci = 0; ci < cell_rows; ++ci) {
+      if (state[ci] != kWaiting) continue;
+      const internal::GridRow& row = templates.cell_rows[ci];
+      if (!f(d_rows + ci, row.g0, row.coef)) return false;
+    }
+    JerkCoefficients jerk_coefficients(at);
+    for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
+      if (state[cell_rows + ti] != kWaiting) continue;
+      const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
+      if (!f(static_rows + ti, t.g0, jerk_coefficients(t))) return false;
+    }
+    return true;
+  };
+  const std::string too_wide = "a row over more than four control values, or a constant one violated";
   // The first start: the control values of the guess.
   std::vector<double> y(static_cast<size_t>(p.n));
   for (int v = 0; v < p.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
@@ -450,24 +474,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     p.essential.resize(d_rows);
     p.id.resize(d_rows);
     p.bandwidth = base_bandwidth;
-    candidates.clear();
-    const auto candidate = [&](size_t id, int g0, const std::array<double, 3>& coef) {
-      const size_t g = static_cast<size_t>(g0);
-      const double H = 1.0 - coef[0] * p.grid_form[g].constant - coef[1] * p.grid_form[g + 1].constant -
-                       coef[2] * p.grid_form[g + 2].constant;
-      candidates.push_back(Candidate{id, g0, coef, H});
-    };
-    for (size_t ci = 0; ci < cell_rows; ++ci) {
-      const internal::GridRow& row = templates.cell_rows[ci];
-      candidate(d_rows + ci, row.g0, row.coef);
-    }
-    JerkCoefficients jerk_coefficients(linearization);
-    for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
-      const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
-      const std::array<double, 3> coef = jerk_coefficients(t);
-      if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) continue;  // holds for b >= 0
-      candidate(static_rows + ti, t.g0, coef);
-    }
+    std::fill(state.begin(), state.end(), kWaiting);
+    waiting = state.size();
     // The working set: the essential rows and those near their bound at the start: kGuessFraction
     // for the first solve, kWorkingSetFraction after it. (The general path takes
     // kUnsettledFraction while T still moves by more than kWorkingSetSettled; from a warm start
@@ -490,20 +498,21 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
                 TouchesMarked(p.rows[r], loose);
     }
     set_free_b(y);
-    {
-      size_t waiting = 0;
-      for (const Candidate& c : candidates) {
-        const internal::BandedProblem::CellMap* map = map_cell(c.g0);
-        const bool take = map == nullptr || !(c.H > 0.0) || (h == 0 && !jerk_aware && c.id >= static_rows) ||
-                          candidate_value(c) >= fraction * c.H || touches(*map, loose);
-        if (!take) {
-          candidates[waiting++] = c;
-        } else if (!materialize(c)) {
-          out->why = "a row over more than four control values, or a constant one violated";
-          return false;
-        }
+    const bool taken = for_each_waiting(linearization, [&](size_t id, int g0, const std::array<double, 3>& coef) {
+      if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) {  // holds for b >= 0
+        state[id - d_rows] = kNone;
+        --waiting;
+        return true;
       }
-      candidates.resize(waiting);
+      const internal::BandedProblem::CellMap* map = map_cell(g0);
+      const double H = row_bound(g0, coef);
+      const bool take = map == nullptr || !(H > 0.0) || (h == 0 && !jerk_aware && id >= static_rows) ||
+                        row_value(g0, coef) >= fraction * H || touches(*map, loose);
+      return !take || materialize(id, g0, coef);
+    });
+    if (!taken) {
+      out->why = too_wide;
+      return false;
     }
     out->build_seconds += SecondsSince(start);
     internal::BandedIpmOutcome outcome;
@@ -531,7 +540,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
           if (keep[r]) z_by_id[static_cast<size_t>(p.id[r])] = outcome.z[r];
         }
       }
-      const bool all = candidates.empty() &&
+      const bool all = waiting == 0 &&
                        std::count(keep.begin(), keep.end(), 1) == static_cast<std::ptrdiff_t>(keep.size());
       if (outcome.kind != internal::BandedIpmOutcome::Kind::kOptimal) {
         if (all) {
@@ -543,13 +552,10 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
         }
         // The same solve with every row decides.
         std::fill(keep.begin(), keep.end(), 1);
-        for (const Candidate& c : candidates) {
-          if (!materialize(c)) {
-            out->why = "a row over more than four control values, or a constant one violated";
-            return false;
-          }
+        if (!for_each_waiting(linearization, materialize)) {
+          out->why = too_wide;
+          return false;
         }
-        candidates.clear();
         continue;
       }
       // Rows left out that the answer violates (by more than the worst kept row: the solver meets
@@ -567,48 +573,44 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
         if (keep[r]) given = std::max(given, values[r] - p.h[r]);
       }
       const auto left_out_violated = [&](size_t r) { return !keep[r] && values[r] - p.h[r] > given; };
-      // A candidate's value at the answer, and whether it is violated (in p's scaled units).
+      // The waiting rows' values at the answer: violated by more than `given`, in p's scaled
+      // units, the controls within kViolatedReach of it are marked: every jerk row over them joins.
       set_free_b(outcome.y);
-      std::vector<double> candidate_values(candidates.size());
-      for (size_t i = 0; i < candidates.size(); ++i) candidate_values[i] = candidate_value(candidates[i]);
-      const auto candidate_violated = [&](size_t i) {
-        return (candidate_values[i] - candidates[i].H) / candidates[i].H > given;
-      };
+      std::vector<char> near(static_cast<size_t>(p.n), 0);
       bool violated = false;
-      for (size_t r = 0; r < p.rows.size() && !violated; ++r) violated = left_out_violated(r);
-      for (size_t i = 0; i < candidates.size() && !violated; ++i) violated = candidate_violated(i);
+      const auto mark = [&](int first, int count) {
+        violated = true;
+        const int lo = std::max(0, first - kViolatedReach);
+        const int hi = std::min(p.n - 1, first + count - 1 + kViolatedReach);
+        for (int c = lo; c <= hi; ++c) near[static_cast<size_t>(c)] = 1;
+      };
+      for (size_t r = 0; r < p.rows.size(); ++r) {
+        if (left_out_violated(r)) mark(p.rows[r].first, p.rows[r].count);
+      }
+      for_each_waiting(linearization, [&](size_t, int g0, const std::array<double, 3>& coef) {
+        // (H > 0: a row with H <= 0 is essential and in p.) (value - H) / H > given, undivided.
+        const double H = row_bound(g0, coef);
+        if (row_value(g0, coef) - H > given * H) {
+          const internal::BandedProblem::CellMap& map = cell_map[static_cast<size_t>(g0)];
+          mark(map.first, map.count);
+        }
+        return true;
+      });
       if (violated) {
-        // The controls within kViolatedReach of a violated row's: every jerk row over them joins.
-        std::vector<char> near(static_cast<size_t>(p.n), 0);
-        const auto mark = [&](int first, int count) {
-          const int lo = std::max(0, first - kViolatedReach);
-          const int hi = std::min(p.n - 1, first + count - 1 + kViolatedReach);
-          for (int c = lo; c <= hi; ++c) near[static_cast<size_t>(c)] = 1;
-        };
-        for (size_t r = 0; r < p.rows.size(); ++r) {
-          if (left_out_violated(r)) mark(p.rows[r].first, p.rows[r].count);
-        }
-        for (size_t i = 0; i < candidates.size(); ++i) {
-          if (candidate_violated(i)) mark(cell_map[static_cast<size_t>(candidates[i].g0)].first, cell_map[static_cast<size_t>(candidates[i].g0)].count);
-        }
         for (size_t r = 0; r < p.rows.size(); ++r) {
           const bool add = round + 1 >= kMaxWorkingSetRounds || values[r] >= kWorkingSetFraction * p.h[r] ||
                            (p.id[r] >= static_cast<int>(static_rows) && TouchesMarked(p.rows[r], near));
           keep[r] = keep[r] || add;
         }
-        size_t waiting = 0;
-        for (size_t i = 0; i < candidates.size(); ++i) {
-          const Candidate& c = candidates[i];
-          const bool add = round + 1 >= kMaxWorkingSetRounds || candidate_values[i] >= kWorkingSetFraction * c.H ||
-                           (c.id >= static_rows && touches(cell_map[static_cast<size_t>(c.g0)], near));
-          if (!add) {
-            candidates[waiting++] = c;
-          } else if (!materialize(c)) {
-            out->why = "a row over more than four control values, or a constant one violated";
-            return false;
-          }
+        const bool added = for_each_waiting(linearization, [&](size_t id, int g0, const std::array<double, 3>& coef) {
+          const bool add = round + 1 >= kMaxWorkingSetRounds || row_value(g0, coef) >= kWorkingSetFraction * row_bound(g0, coef) ||
+                           (id >= static_rows && touches(cell_map[static_cast<size_t>(g0)], near));
+          return !add || materialize(id, g0, coef);
+        });
+        if (!added) {
+          out->why = too_wide;
+          return false;
         }
-        candidates.resize(waiting);
         y = outcome.y;
       }
       out->build_seconds += SecondsSince(start);
@@ -875,10 +877,13 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     // The structured path first (SolveStructuredScp); the general one below whenever it does not
     // answer.
     const Clock::time_point start = Clock::now();
-    internal::JerkTemplates templates;
+    // The working memory of every banded solve below, kept for the next Solve.
+    if (!workspace_) workspace_ = std::make_unique<internal::SolveWorkspace>();
+    internal::SolveWorkspace& workspace = *workspace_;
+    const internal::JerkTemplates& templates = workspace.templates;
     TemporalDiscretization d;
     try {
-      d = internal::DiscretizeJerkLimitedTemplates(problem, &templates);
+      d = internal::DiscretizeJerkLimitedTemplates(problem, &workspace.templates);
     } catch (const std::exception&) {
       d = TemporalDiscretization();
     }
@@ -887,9 +892,6 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     internal::BandedIpmSettings settings;
     settings.gap_tolerance = kStructuredGapShare * problem.scp_tolerance;
     settings.max_iterations = structured_jerk_iterations();
-    // The working memory of every banded solve below, kept for the next Solve.
-    if (!workspace_) workspace_ = std::make_unique<internal::SolveWorkspace>();
-    internal::SolveWorkspace& workspace = *workspace_;
     // The programme on a coarser grid first (kCoarsening times fewer cells): its answer, a
     // jerk-limited profile, is the first linearization and start on this grid, and says which
     // jerk rows can bind (the jerk-free guess says nothing of that, so its first solve takes
@@ -902,7 +904,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       coarse.cells_per_piece = coarse_cells;
       // One solve, linearized at the jerk-free guess: a linearization point, not an answer.
       coarse.max_scp_iterations = 1;
-      internal::JerkTemplates coarse_templates;
+      internal::JerkTemplates& coarse_templates = workspace.coarse_templates;
       TemporalDiscretization dc;
       try {
         dc = internal::DiscretizeJerkLimitedTemplates(coarse, &coarse_templates);
