@@ -335,6 +335,7 @@ struct BandedIpmWorkspace::Buffers {
   std::vector<double> x, s, z, grad, rd, rp, dx, ds, dz, inv_sz, gz, g_inv_s, g_cross, g_dz, rhs;
   std::vector<double> v[kMaxRowSpan];
   std::vector<CellWindow> windows;
+  std::vector<char> shares;  // per cell: its first value is the previous cell's last (EvaluateCells)
   Band hess, factor;
   void Clear() {
     runs.clear();
@@ -345,6 +346,7 @@ struct BandedIpmWorkspace::Buffers {
     }
     for (std::vector<double>& u : v) u.clear();
     windows.clear();
+    shares.clear();
     hess.v.clear();
     factor.v.clear();
   }
@@ -396,6 +398,17 @@ class BandedIpm {
       run.span = std::max<int>(run.span, row.count);
     }
     for (int r = 0; r < m_; ++r) h_max_ = std::max(h_max_, std::abs(Bound(static_cast<size_t>(r))));
+    // Cells whose first value is the previous cell's last (consecutive cells of a piece): b, its
+    // root and 1 / root carry over in EvaluateCells.
+    const auto same = [](const ControlForm& a, const ControlForm& b) {
+      if (a.first != b.first || a.count != b.count || a.constant != b.constant) return false;
+      for (int t = 0; t < a.count; ++t) {
+        if (a.coef[static_cast<size_t>(t)] != b.coef[static_cast<size_t>(t)]) return false;
+      }
+      return true;
+    };
+    shares_.assign(p.cells.size(), 0);
+    for (size_t k = 1; k < p.cells.size(); ++k) shares_[k] = same(p.cells[k].b[0], p.cells[k - 1].b[1]) ? 1 : 0;
     // Each cell's two forms on one window of unknowns (over control values), for EvaluateCells.
     if (p.controls) {
       windows_.resize(p.cells.size());
@@ -552,9 +565,27 @@ class BandedIpm {
     // (The objective in a local: summed in the member, each cell's stores into grad_ and hess_
     // forced it through memory.)
     double objective = 0.0;
-    for (const BandedCell& c : p_.cells) {
-      const double b0 = std::max(c.b[0].Value(x_), 0.0), b1 = std::max(c.b[1].Value(x_), 0.0);
-      const double r0 = std::sqrt(b0), r1 = std::sqrt(b1);
+    // The previous cell's last value, its root and 1 / root (see shares_).
+    double last_b = 0.0, last_r = 0.0, last_inv_r = 0.0;
+    for (size_t k = 0; k < p_.cells.size(); ++k) {
+      const BandedCell& c = p_.cells[k];
+      const bool free0 = c.b[0].count > 0, free1 = c.b[1].count > 0;
+      double b0, r0, inv_r0;
+      if (shares_[k]) {
+        b0 = last_b;
+        r0 = last_r;
+        inv_r0 = last_inv_r;
+      } else {
+        b0 = std::max(c.b[0].Value(x_), 0.0);
+        r0 = std::sqrt(b0);
+        inv_r0 = free0 ? 1.0 / r0 : 0.0;
+      }
+      const double b1 = std::max(c.b[1].Value(x_), 0.0);
+      const double r1 = std::sqrt(b1);
+      const double inv_r1 = free1 ? 1.0 / r1 : 0.0;
+      last_b = b1;
+      last_r = r1;
+      last_inv_r = inv_r1;
       const double S = r0 + r1;
       // Three divisions, every term from them (the divider bounds this loop).
       const double inv_S = 1.0 / S;
@@ -563,10 +594,8 @@ class BandedIpm {
       const double q = 0.5 * c.c * inv_S * inv_S;
       const double reg_grad = 2.0 * c.reg * (b1 - b0);
       // Derivatives in b0, b1; a constant b has none.
-      const bool free0 = c.b[0].count > 0, free1 = c.b[1].count > 0;
       double db[2] = {-reg_grad, reg_grad};
       double h00 = 2.0 * c.reg, h11 = 2.0 * c.reg, h01 = -2.0 * c.reg;
-      const double inv_r0 = free0 ? 1.0 / r0 : 0.0, inv_r1 = free1 ? 1.0 / r1 : 0.0;
       if (free0) {
         db[0] += -q * inv_r0;
         h00 += q * inv_r0 * inv_r0 * (inv_S + 0.5 * inv_r0);
@@ -596,7 +625,7 @@ class BandedIpm {
         continue;
       }
       // The two forms on one window of unknowns: grad += db_j c_j, hess += sum_jk h_jk c_j c_k'.
-      const CellWindow& window = windows_[static_cast<size_t>(&c - p_.cells.data())];
+      const CellWindow& window = windows_[k];
       const int lo = window.lo, w = window.width;
       const auto& cv = window.cv;
       // As h_jk c_k, the entries are (h00 c0_a + h01 c1_a) c0_b + (h01 c0_a + h11 c1_a) c1_b; entry
@@ -748,6 +777,7 @@ class BandedIpm {
   std::vector<double>&gz_ = b_.gz, &g_inv_s_ = b_.g_inv_s, &g_cross_ = b_.g_cross, &g_dz_ = b_.g_dz, &rhs_ = b_.rhs;
   std::vector<double> (&v_)[kMaxRowSpan] = b_.v;  // the rows' coefficients as columns (the first W)
   std::vector<CellWindow>& windows_ = b_.windows;  // per cell (over control values only)
+  std::vector<char>& shares_ = b_.shares;          // per cell
   double objective_ = 0.0;
   double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
   const bool wide_ = RowPassesAvx2();
