@@ -1085,18 +1085,17 @@ TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& pro
   // Emptied, keeping their memory (a solver keeps its templates from one solve to the next).
   templates->cell_rows.clear();
   templates->jerk_rows.clear();
-  // Room for a regular cell's rows at the curve's largest degree, so that the vectors never grow
+  // Room for a regular cell's rows at the curve's largest degree, so that the vectors seldom grow
   // (each growth copied them and touched fresh pages: on the default plan both grew once): with
   // f' of degree dq, 3 (2 dq + 3) velocity and 6 (dq + 2) acceleration rows at most, and 6 (dq + 1)
-  // jerk templates, and for each possible rest cell (two per piece) 36 dq + 64 more of each (its
-  // polynomials in w have about three times the degree; measured on cubics: 27 and 78 more).
+  // jerk templates, and a few hundred more for rest cells (whose polynomials in w have about three
+  // times the degree: on the benchmark's cubics their two rest cells took 54 and 156 more than
+  // this room without them, so the vectors grow once there, in a solver's first solve).
   int dq = 0;
   for (int i = 0; i < problem.curve.num_pieces(); ++i) dq = std::max(dq, problem.curve.piece(i).degree() - 1);
-  const size_t pieces = static_cast<size_t>(problem.curve.num_pieces());
-  const size_t cells = pieces * static_cast<size_t>(problem.cells_per_piece);
-  const size_t rest = 2 * pieces * static_cast<size_t>(36 * dq + 64);
-  templates->cell_rows.reserve(static_cast<size_t>(12 * dq + 21) * cells + rest);
-  templates->jerk_rows.reserve(static_cast<size_t>(6 * dq + 6) * cells + rest);
+  const size_t cells = static_cast<size_t>(problem.curve.num_pieces()) * static_cast<size_t>(problem.cells_per_piece);
+  templates->cell_rows.reserve(static_cast<size_t>(12 * dq + 21) * cells + 256);
+  templates->jerk_rows.reserve(static_cast<size_t>(6 * dq + 6) * cells + 256);
   return DiscretizeJerkLimitedImpl(problem, JerkRows::kNone, nullptr, templates);
 }
 
