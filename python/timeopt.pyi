@@ -117,6 +117,7 @@ class TemporalResult:
     reduced_accuracy: bool
     method: str
     infeasibility: Optional[dict[str, str]]
+    boundary_relaxation: Optional[dict[str, Union[float, str]]]
     def is_success(self) -> bool: ...
     def to_json(self) -> str: ...
 

@@ -571,6 +571,22 @@ PYBIND11_MODULE(timeopt, m) {
             return d;
           },
           "Why it is infeasible (cause, where, detail), or None.")
+      .def_property_readonly(
+          "boundary_relaxation",
+          [](const TemporalResult& r) -> py::object {
+            if (!r.boundary_relaxation) return py::none();
+            const TemporalResult::BoundaryRelaxation& b = *r.boundary_relaxation;
+            py::dict d;
+            d["start_speed_given"] = b.start_speed_given;
+            d["start_speed"] = b.start_speed;
+            d["end_speed_given"] = b.end_speed_given;
+            d["end_speed"] = b.end_speed;
+            d["start_scale"] = b.start_scale;
+            d["start_acceleration"] = b.start_acceleration;
+            return d;
+          },
+          "With relax_boundary on an infeasible problem: the given and flown boundary speeds (m/s), "
+          "start_scale and what became of the start acceleration; or None.")
       .def("is_success", &TemporalResult::is_success)
       .def("to_json", [](const TemporalResult& r) { return TemporalResultToJson(r); }, "The result JSON of `timeopt temporal`.")
       .def("__repr__", [](const TemporalResult& r) {

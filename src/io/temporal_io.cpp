@@ -146,7 +146,8 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
         {"start_speed_given", b.start_speed_given}, {"start_speed", b.start_speed},
         {"start_violation", b.start_speed_given - b.start_speed},
         {"end_speed_given", b.end_speed_given}, {"end_speed", b.end_speed},
-        {"end_violation", b.end_speed_given - b.end_speed}};
+        {"end_violation", b.end_speed_given - b.end_speed},
+        {"start_scale", b.start_scale}, {"start_acceleration", b.start_acceleration}};
   }
   json joints = json::array();
   for (const JointInfo& ji : r.joints) {

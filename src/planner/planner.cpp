@@ -147,11 +147,6 @@ bool PlannerOptions::IsValid(std::string* error) const {
 
 namespace {
 
-// Bisection on the scale of a start state that cannot be flown (jerk-limited mode): a vehicle
-// tracking at its limits is usually a few percent over what a new curve allows, so the first try
-// is 0.9; 0.01 is within the flight criterion's 1% on speed. About 7 temporal solves per search.
-constexpr double kStartScaleFirstGuess = 0.9;
-constexpr double kStartScaleTolerance = 0.01;
 
 // Samples of a piece at chord steps of at most `step` (polygon length at 16 samples, +25%).
 // The length of the 16-chord polyline through the piece, metres.
@@ -402,62 +397,11 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     temporal_ = MakeSocpTemporalSolver(options.socp);
     temporal_options_ = options.socp;
   }
+  // A start in motion that cannot be flown as given is relaxed by the temporal stage (the start
+  // speed lowered on the paper's and certified rows, the start state scaled towards rest with a
+  // jerk limit; TemporalProblem::relax_boundary).
   result.temporal = temporal_->Solve(problem);
-  const bool start_failed = result.temporal.status == TemporalStatus::kInfeasible ||
-                            result.temporal.status == TemporalStatus::kNumericalError;
-  if (start_failed && moving && problem.limits.max_jerk) {
-    // The jerk-limited mode has no boundary relaxation in the temporal stage: the planner scales
-    // the start state toward rest, the speed by lambda and the acceleration across the path by
-    // lambda^2 (what the same curve gives at that speed), to the largest feasible lambda by
-    // bisection. A braking start keeps its braking (lowering it would only lengthen the stop);
-    // if no lambda is feasible that way, the whole acceleration is scaled by lambda^2 (at lambda
-    // 0, rest, which any curve allows). A numerical error is taken the same way: a start exactly
-    // at a limit (a vehicle that tracked onto it) leaves the interior-point method no interior
-    // at the first grid point.
-    const double speed = start_velocity.norm();
-    const Eigen::Vector3d along = speed > 0.0 ? Eigen::Vector3d(start_velocity / speed) : Eigen::Vector3d::Zero();
-    const Eigen::Vector3d tangential = along * along.dot(start_acceleration);
-    const bool braking = along.dot(start_acceleration) < 0.0;
-    const auto search = [&](bool keep_braking, double* scale) {
-      double feasible = 0.0, infeasible = 1.0;
-      std::optional<TemporalResult> best;
-      for (double lambda = kStartScaleFirstGuess; infeasible - feasible > kStartScaleTolerance;
-           lambda = 0.5 * (feasible + infeasible)) {
-        TemporalProblem scaled = problem;
-        scaled.boundary.start_velocity = lambda * start_velocity;
-        scaled.boundary.start_acceleration =
-            keep_braking ? Eigen::Vector3d(lambda * lambda * (start_acceleration - tangential) + tangential)
-                         : Eigen::Vector3d(lambda * lambda * start_acceleration);
-        TemporalResult attempt = temporal_->Solve(scaled);
-        if (attempt.status == TemporalStatus::kOptimal) {
-          feasible = lambda;
-          best = std::move(attempt);
-        } else if (attempt.status == TemporalStatus::kInfeasible ||
-                   attempt.status == TemporalStatus::kNumericalError) {
-          infeasible = lambda;
-        } else {
-          break;
-        }
-      }
-      *scale = feasible;
-      return best;
-    };
-    double scale = 0.0;
-    bool kept = braking;
-    std::optional<TemporalResult> best;
-    if (braking) best = search(true, &scale);
-    if (!best) {
-      kept = false;
-      best = search(false, &scale);
-    }
-    if (best) {
-      best->message = "start speed scaled by " + std::to_string(scale) +
-                      (kept ? ", braking kept" : ", acceleration by its square") +
-                      ": the given state cannot be flown within the jerk limit";
-      result.start_scale = scale;
-      result.temporal = std::move(*best);
-    }
-  }
+  if (result.temporal.boundary_relaxation) result.start_scale = result.temporal.boundary_relaxation->start_scale;
   result.times.temporal_ms = MillisecondsSince(t);
   {
     std::ostringstream outcome;

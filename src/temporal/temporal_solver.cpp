@@ -5,6 +5,8 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -358,7 +360,7 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
                      "), but a rest-to-rest problem whose limits allow hovering always has one (the "
                      "same path, slowly enough): a numerical failure";
   }
-  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 &&
+  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ &&
       (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
     // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.
     IpoptTemporalOptions fallback;
@@ -379,11 +381,21 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
     result.solve_time_seconds = exact.solve_time_seconds;
     result.iterations = exact.iterations;
   }
+  // Rows that make no chain along the path (a jerk limit, lambda_a): the nearest start state is
+  // found by bisection (RelaxStartState); a jerk-limited numerical failure too.
+  const bool scale_start = problem.relax_boundary &&
+                           (problem.limits.max_jerk || problem.limits.max_acceleration_change) &&
+                           (problem.boundary.start_velocity.squaredNorm() > 0.0 ||
+                            problem.boundary.start_acceleration.squaredNorm() > 0.0);
+  if (scale_start && problem.limits.max_jerk && result.status == TemporalStatus::kNumericalError) {
+    return RelaxStartState(problem, std::move(result));
+  }
   if (result.status != TemporalStatus::kInfeasible) return result;
   // Why, and (asked for) the closest boundary speeds: only infeasible problems pay for this.
   std::optional<internal::RelaxedSpeeds> relaxed;
   result.infeasibility = internal::DiagnoseInfeasible(problem, result.message, &relaxed);
-  if (!problem.relax_boundary || !relaxed) return result;
+  if (!problem.relax_boundary) return result;
+  if (!relaxed) return scale_start ? RelaxStartState(problem, std::move(result)) : result;
   TemporalProblem closest = problem;
   closest.relax_boundary = false;
   closest.boundary.start_velocity = problem.boundary.start_velocity * relaxed->start_factor;
@@ -393,12 +405,102 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   answer.solve_time_seconds += result.solve_time_seconds;
   answer.iterations += result.iterations;
   if (answer.is_success()) {
-    answer.boundary_relaxation = TemporalResult::BoundaryRelaxation{
-        problem.boundary.start_velocity.norm(), closest.boundary.start_velocity.norm(),
-        problem.boundary.end_velocity.norm(), closest.boundary.end_velocity.norm()};
+    TemporalResult::BoundaryRelaxation relaxation;
+    relaxation.start_speed_given = problem.boundary.start_velocity.norm();
+    relaxation.start_speed = closest.boundary.start_velocity.norm();
+    relaxation.end_speed_given = problem.boundary.end_velocity.norm();
+    relaxation.end_speed = closest.boundary.end_velocity.norm();
+    relaxation.start_scale = relaxation.start_speed_given > 0.0 ? relaxation.start_speed / relaxation.start_speed_given : 1.0;
+    answer.boundary_relaxation = relaxation;
     answer.infeasibility = result.infeasibility;  // why the given boundaries could not be flown
     answer.message = "boundary relaxed: " + result.infeasibility->detail;
   }
+  return answer;
+}
+
+namespace {
+// The bisection of RelaxStartState: a vehicle tracking at its limits is usually a few percent
+// over what a new curve allows, so the first try is 0.9; 0.01 is within a flight's 1% on speed.
+// About 7 solves per search.
+constexpr double kStartScaleFirstGuess = 0.9;
+constexpr double kStartScaleTolerance = 0.01;
+}  // namespace
+
+TemporalResult TemporalSolver::RelaxStartState(const TemporalProblem& problem, TemporalResult failed) {
+  const Eigen::Vector3d v0 = problem.boundary.start_velocity, a0 = problem.boundary.start_acceleration;
+  const double speed = v0.norm();
+  const Eigen::Vector3d along = speed > 0.0 ? Eigen::Vector3d(v0 / speed) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d tangential = along * along.dot(a0);
+  const bool braking = along.dot(a0) < 0.0;
+  TemporalProblem scaled = problem;
+  scaled.relax_boundary = false;
+  struct Probing {
+    bool& flag;
+    explicit Probing(bool& f) : flag(f) { flag = true; }
+    ~Probing() { flag = false; }
+  } probing(probing_start_);
+  double build = failed.build_time_seconds, solve = failed.solve_time_seconds;
+  int iterations = failed.iterations;
+  // The largest lambda, within kStartScaleTolerance, whose state solves: the velocity times lambda,
+  // the acceleration times lambda^2 (keep_braking: only its part across the path). A status other
+  // than optimal, infeasible or a numerical error (an iteration or time limit) ends the search.
+  const auto search = [&](bool keep_braking, double* scale) {
+    double feasible = 0.0, infeasible = 1.0;
+    std::optional<TemporalResult> best;
+    for (double lambda = kStartScaleFirstGuess; infeasible - feasible > kStartScaleTolerance;
+         lambda = 0.5 * (feasible + infeasible)) {
+      scaled.boundary.start_velocity = lambda * v0;
+      scaled.boundary.start_acceleration = keep_braking ? Eigen::Vector3d(lambda * lambda * (a0 - tangential) + tangential)
+                                                        : Eigen::Vector3d(lambda * lambda * a0);
+      TemporalResult attempt = Solve(scaled);
+      build += attempt.build_time_seconds;
+      solve += attempt.solve_time_seconds;
+      iterations += attempt.iterations;
+      if (attempt.status == TemporalStatus::kOptimal) {
+        feasible = lambda;
+        best = std::move(attempt);
+      } else if (attempt.status == TemporalStatus::kInfeasible || attempt.status == TemporalStatus::kNumericalError) {
+        infeasible = lambda;
+      } else {
+        break;
+      }
+    }
+    *scale = feasible;
+    return best;
+  };
+  // A braking start keeps its braking (lowering it would only lengthen the stop) when some lambda
+  // allows that; otherwise the whole acceleration is scaled (at lambda = 0, rest).
+  double scale = 0.0;
+  bool kept = braking;
+  std::optional<TemporalResult> best;
+  if (braking) best = search(true, &scale);
+  if (!best) {
+    kept = false;
+    best = search(false, &scale);
+  }
+  if (!best) {
+    failed.build_time_seconds = build;
+    failed.solve_time_seconds = solve;
+    failed.iterations = iterations;
+    return failed;
+  }
+  TemporalResult answer = std::move(*best);
+  answer.build_time_seconds = build;
+  answer.solve_time_seconds = solve;
+  answer.iterations = iterations;
+  TemporalResult::BoundaryRelaxation relaxation;
+  relaxation.start_speed_given = speed;
+  relaxation.start_speed = scale * speed;
+  relaxation.end_speed_given = relaxation.end_speed = problem.boundary.end_velocity.norm();
+  relaxation.start_scale = scale;
+  relaxation.start_acceleration = kept ? "braking_kept" : "scaled";
+  answer.boundary_relaxation = relaxation;
+  answer.infeasibility = failed.infeasibility;  // why the given start could not be flown (if found)
+  std::ostringstream message;
+  message << "boundary relaxed: start state scaled by " << scale
+          << (kept ? " (braking kept)" : " (acceleration by its square)") << ": "
+          << (failed.infeasibility ? failed.infeasibility->detail : failed.message);
+  answer.message = message.str();
   return answer;
 }
 

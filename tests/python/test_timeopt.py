@@ -154,6 +154,16 @@ def test_infeasible_is_a_status_with_a_diagnosis():
     assert result.infeasibility["cause"] == "boundary_speed"
     with pytest.raises(ValueError, match="not optimal"):
         timeopt.Trajectory(problem.curve, result)
+    assert result.boundary_relaxation is None
+    # Relaxed: the start speed lowered to the limit (2 m/s), the contract line then takes 6 s.
+    problem.relax_boundary = True
+    relaxed = timeopt.solve(problem)
+    assert relaxed.status == timeopt.TemporalStatus.optimal
+    assert relaxed.boundary_relaxation["start_speed_given"] == pytest.approx(3.0)
+    assert relaxed.boundary_relaxation["start_speed"] == pytest.approx(2.0, rel=1e-6)
+    assert relaxed.boundary_relaxation["start_scale"] == pytest.approx(2.0 / 3.0, rel=1e-6)
+    assert relaxed.boundary_relaxation["start_acceleration"] == "unchanged"
+    assert relaxed.total_time == pytest.approx(6.0, rel=1e-6)
 
 
 def test_conic_solver_on_known_optima():

@@ -2,6 +2,7 @@
 // answer (TemporalProblem::relax_boundary): hand-built cases with closed forms, both backends.
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -92,19 +93,67 @@ TEST(Infeasibility, FeasibleProblemsAreUntouched) {
 }
 
 // A boundary acceleration that lambda_a cannot bring to rest (1 m/s^2, changing by 1e-4 per
-// cell over 20 cells): named from the solver's verdict; not relaxed (the relaxation moves speeds).
+// cell over 20 cells): named from the solver's verdict. Relaxed, the start state is scaled towards
+// rest: the acceleration by lambda^2, the largest lambda within the bisection's 0.01 (checked by
+// solving at lambda and just above lambda + 0.01).
 TEST(Infeasibility, UnreachableBoundaryAccelerationWithLambdaA) {
   TemporalProblem p = LineProblem(10.0, 20);
   p.limits.max_acceleration_change = 1e-4;
-  p.boundary.start_acceleration = Eigen::Vector3d(1.0, 0.0, 0.0);
-  p.relax_boundary = true;
+  const Eigen::Vector3d a0(1.0, 0.0, 0.0);
+  p.boundary.start_acceleration = a0;
   for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
-    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    std::unique_ptr<TemporalSolver> solver = MakeTemporalSolver(backend);
+    p.relax_boundary = false;
+    const TemporalResult r = solver->Solve(p);
     EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << ToString(backend);
     ASSERT_TRUE(r.infeasibility.has_value());
     EXPECT_FALSE(r.boundary_relaxation.has_value());
     EXPECT_FALSE(r.infeasibility->cause.empty());
+    p.relax_boundary = true;
+    const TemporalResult relaxed = solver->Solve(p);
+    ASSERT_EQ(relaxed.status, TemporalStatus::kOptimal) << ToString(backend) << ": " << relaxed.message;
+    ASSERT_TRUE(relaxed.boundary_relaxation.has_value());
+    ASSERT_TRUE(relaxed.infeasibility.has_value());  // why the given start could not be flown
+    const double lambda = relaxed.boundary_relaxation->start_scale;
+    EXPECT_EQ(relaxed.boundary_relaxation->start_acceleration, "scaled");
+    EXPECT_GT(lambda, 0.0);
+    EXPECT_LT(lambda, 1.0);
+    TemporalProblem at = p;
+    at.relax_boundary = false;
+    at.boundary.start_acceleration = lambda * lambda * a0;
+    EXPECT_EQ(solver->Solve(at).status, TemporalStatus::kOptimal) << ToString(backend);
+    at.boundary.start_acceleration = (lambda + 0.011) * (lambda + 0.011) * a0;
+    EXPECT_NE(solver->Solve(at).status, TemporalStatus::kOptimal) << ToString(backend) << " lambda " << lambda;
   }
+}
+
+// A jerk-limited start too fast to stop within the path (3 m/s, 1 m to rest; v 4, a 3, j 10): the
+// start is scaled to the largest speed that can brake to rest in 1 m. Closed form: an S-curve stop
+// from v (>= a^2 / j) takes v (v / a + a / j) / 2 metres, so v = 2.0405 m/s, lambda = 0.6802. The
+// answer is within the bisection's 0.01 below it, and not above it by more than the grid's
+// rounding (1e-3).
+TEST(Infeasibility, JerkLimitedStartTooFastToStopIsScaledToTheClosedForm) {
+  TemporalProblem p = LineProblem(1.0, 50);
+  p.limits.max_velocity = Eigen::Vector3d::Constant(4.0);
+  p.limits.max_acceleration = Eigen::Vector3d::Constant(3.0);
+  p.limits.max_jerk = Eigen::Vector3d::Constant(10.0);
+  p.constraint_mode = ConstraintMode::kCertified;
+  p.boundary.start_velocity = Eigen::Vector3d(3.0, 0.0, 0.0);
+  std::unique_ptr<TemporalSolver> solver = MakeSocpTemporalSolver();
+  const TemporalResult plain = solver->Solve(p);
+  EXPECT_NE(plain.status, TemporalStatus::kOptimal);
+  p.relax_boundary = true;
+  const TemporalResult r = solver->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kOptimal) << r.message;
+  ASSERT_TRUE(r.boundary_relaxation.has_value());
+  const double v = 0.5 * (-0.9 + std::sqrt(0.81 + 24.0));  // v^2 / 3 + 0.3 v = 2
+  const double lambda = r.boundary_relaxation->start_scale;
+  EXPECT_GE(lambda, v / 3.0 - 0.0101);
+  EXPECT_LE(lambda, v / 3.0 + 1e-3);
+  EXPECT_NEAR(r.boundary_relaxation->start_speed, 3.0 * lambda, 1e-12);
+  EXPECT_EQ(r.boundary_relaxation->start_acceleration, "scaled");  // no braking given to keep
+  EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
+  EXPECT_EQ(r.message.rfind("boundary relaxed: start state scaled by", 0), 0u) << r.message;
 }
 
 // Pieces that do not meet (piece 1 starts 4 m from where piece 0 ends) are invalid input naming

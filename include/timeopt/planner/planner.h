@@ -39,8 +39,9 @@ struct PlannerOptions {
   // motion (re-planning in flight) makes the curve leave the start along the velocity, with the
   // curvature that gives the acceleration, and the temporal stage start at that state; if the
   // limits cannot be met from it (too fast for what lies ahead), the temporal stage answers with
-  // the closest start speed it can fly (TemporalProblem::relax_boundary; the paper's and certified
-  // rows without a jerk limit), and the plan says so. A state at most 1% over the per-axis or norm
+  // the closest start it can fly (TemporalProblem::relax_boundary: the start speed lowered on the
+  // paper's and certified rows, the start state scaled towards rest with a jerk limit), and the
+  // plan says so (start_scale, the temporal result's boundary_relaxation). A state at most 1% over the per-axis or norm
   // limits (a vehicle tracking at its limits overshoots them a little) is scaled onto them first.
   Eigen::Vector3d start_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d start_acceleration = Eigen::Vector3d::Zero();
@@ -169,9 +170,10 @@ struct PlanResult {
   // bend the trajectory must brake for shows in both.
   double min_interior_speed = std::numeric_limits<double>::quiet_NaN();
   double min_curvature_radius = std::numeric_limits<double>::quiet_NaN();
-  // A start in motion that no jerk-limited profile can leave within the limits: the largest
-  // lambda (within 0.01) for which the start velocity times lambda and the start acceleration times
-  // lambda^2 can be flown; the trajectory starts from that state. 1: the given state.
+  // A start in motion that cannot be flown as given: the factor on its speed that the temporal
+  // stage's relaxation found (boundary_relaxation->start_scale; with a jerk limit the largest
+  // lambda, within 0.01, for which the velocity times lambda and the acceleration times lambda^2
+  // can be flown); the trajectory starts from that state. 1: the given state.
   double start_scale = 1.0;
   PlanStageTimes times;
   bool is_success() const { return status == PlanStatus::kSuccess; }

@@ -121,11 +121,17 @@ struct TemporalProblem {
   // jerk rows exactly and solves once (these two are not used). scp_tolerance in (0, 0.1],
   // max_scp_iterations in [1, 100].
   double scp_tolerance = 1e-4;
-  // An infeasible problem answers with the closest boundary speeds it can fly instead (the result's
-  // boundary_relaxation): the start speed lowered as little as possible, then the end speed, along
-  // their tangents, and the minimum time for them. For the paper's and certified rows without
-  // lambda_a or a jerk limit (their rows make a chain along the path); otherwise the status stays
-  // infeasible with the diagnosis. Boundary accelerations are not relaxed.
+  // An infeasible problem answers with the closest boundary it can fly instead (the result's
+  // boundary_relaxation), and the minimum time for it:
+  // - the paper's and certified rows without lambda_a or a jerk limit (their rows make a chain
+  //   along the path): the start speed lowered as little as possible, then the end speed, along
+  //   their tangents; boundary accelerations are not relaxed;
+  // - a jerk limit or lambda_a, with a start in motion: the start state scaled towards rest, its
+  //   velocity by the largest lambda (within 0.01) that can be flown and its acceleration by
+  //   lambda^2 (what the same curve gives at that speed; a braking start keeps its braking along
+  //   the path when it can). A jerk-limited solve that fails numerically is relaxed the same way (a
+  //   start exactly at a limit leaves an interior-point method no interior at the first grid point).
+  // Otherwise the status stays infeasible, with the diagnosis.
   bool relax_boundary = false;
   int max_scp_iterations = 30;
 

@@ -95,9 +95,15 @@ struct TemporalResult {
   std::optional<Infeasibility> infeasibility;
   // TemporalProblem::relax_boundary on an infeasible problem: the closest boundary speeds it could
   // fly (m/s along the tangent), the given ones, and the answer for them (status optimal).
+  // start_scale is start_speed / start_speed_given (1 for a start at rest); start_acceleration says
+  // what became of the start acceleration: "unchanged" (the speeds' relaxation), "scaled" (times
+  // start_scale^2) or "braking_kept" (its part across the path times start_scale^2, its braking
+  // along the path as given).
   struct BoundaryRelaxation {
     double start_speed_given = 0.0, start_speed = 0.0;
     double end_speed_given = 0.0, end_speed = 0.0;
+    double start_scale = 1.0;
+    std::string start_acceleration = "unchanged";
   };
   std::optional<BoundaryRelaxation> boundary_relaxation;
   bool jerk_limited = false;  // the problem had limits.max_jerk (set whatever the status)

@@ -33,8 +33,8 @@ class TemporalSolver {
   // problem comes back with result.infeasibility, or relaxed (TemporalProblem::relax_boundary).
   //
   // A solver keeps the working memory of its last jerk-limited solve for the next one, whose pages
-  // are then already mapped (a fresh page costs a fault: 10-20% of a solve): about 5.5 kB per
-  // cell, 2.8 MB at 10 pieces of 50 cells, 5.7 MB for the default plan (27 pieces of 20). Give
+  // are then already mapped (a fresh page costs a fault: 10-20% of a solve): about 10 kB per
+  // cell with the rows' templates, about 8 MB for the default plan (27 pieces of 20 cells). Give
   // each thread its own solver.
   TemporalResult Solve(const TemporalProblem& problem);
   virtual TemporalBackend backend() const = 0;
@@ -63,6 +63,13 @@ class TemporalSolver {
   TemporalResult SolveJerkLimited(const TemporalProblem& problem);
   // Without a jerk limit: discretize and solve once.
   TemporalResult SolvePaperOrCertified(const TemporalProblem& problem);
+  // TemporalProblem::relax_boundary where the rows make no chain (jerk-limited, lambda_a): the
+  // nearest start state that can be flown, by bisection on its scale (see temporal_solver.cpp);
+  // `failed` when none is found.
+  TemporalResult RelaxStartState(const TemporalProblem& problem, TemporalResult failed);
+  // Set while RelaxStartState probes scaled starts: a probe's numerical failure counts as
+  // infeasible, so it skips the Ipopt fallback (a probe at the edge of feasibility took its 20 s).
+  bool probing_start_ = false;
 
   std::unique_ptr<internal::SolveWorkspace> workspace_;  // made by the first jerk-limited solve
 };
