@@ -147,7 +147,6 @@ bool PlannerOptions::IsValid(std::string* error) const {
 
 namespace {
 
-
 // Samples of a piece at chord steps of at most `step` (polygon length at 16 samples, +25%).
 // The length of the 16-chord polyline through the piece, metres.
 double PolylineLength(const PolynomialPiece& piece) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <sstream>
 #include <functional>
@@ -209,18 +210,23 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
 
 // A linearized jerk row of a cell before its linearization point bbar is known (the sequential
 // convex programme's rows, see jerk_discretization.cpp): the row is
-//   sum_j (a[j] 2 sqrt(bbar) / (3 jmax) + basis[j] / (3 bbar)) b_{g0 + j} <= 1
-// over the cell's three half-grid values, with bbar = LinearizationPoint of a regular cell, or for
-// a part [w0, w1] of a rest cell (rest_far >= 0) the largest q there, q(w) = alpha (1 - w) + b_far w
-// with alpha its middle value and b_far the value g0 + rest_far (at least the same floor).
+//   sum_j (a[j] 2 sqrt(bbar) / 3 + basis[j] / (3 bbar)) b_{g0 + j} <= 1
+// over the cell's three half-grid values (a already divided by the axis' jerk limit), with bbar =
+// LinearizationPoint of a regular cell, or for part `part` of `parts` equal parts of a rest cell
+// (rest_far >= 0), [w0, w1] = [part, part + 1] / parts, the largest q there,
+// q(w) = alpha (1 - w) + b_far w with alpha its middle value and b_far the value g0 + rest_far (at
+// least the same floor). 56 bytes: a solve reads every template once or twice per round, and at
+// 80 bytes (w0, w1 and jmax stored) they were 0.7 MB of the 10/50 benchmark's working memory.
 struct JerkRowTemplate {
   int g0 = 0;
-  int rest_far = -1;
-  double w0 = 0.0, w1 = 1.0;
-  double jmax = 0.0;
+  std::int16_t rest_far = -1;
+  std::int8_t part = 0, parts = 1;
   std::array<double, 3> a{};
   std::array<double, 3> basis{};
+  double w0() const { return static_cast<double>(part) / parts; }
+  double w1() const { return (part + 1.0) / parts; }
 };
+static_assert(sizeof(JerkRowTemplate) == 56, "JerkRowTemplate: 56 bytes");
 // A row sum_j coef[j] b_{g0 + j} <= 1 over a regular cell's three half-grid values.
 struct GridRow {
   int g0 = 0;

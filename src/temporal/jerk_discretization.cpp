@@ -566,9 +566,8 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
     for (int i = 0; i < size; ++i) {
       internal::JerkRowTemplate t;
       t.g0 = g0;
-      t.jmax = jmax;
       for (int j = 0; j < 3; ++j) {
-        t.a[static_cast<size_t>(j)] = sign * w[j][i];
+        t.a[static_cast<size_t>(j)] = sign * w[j][i] / jmax;
         t.basis[static_cast<size_t>(j)] = c.basis_bernstein[j](i);
       }
       c.templates->jerk_rows.push_back(t);
@@ -721,14 +720,13 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
           for (int i = 0; i < size; ++i) {
             internal::JerkRowTemplate t;
             t.g0 = g0;
-            t.jmax = jmax;
             if (rest != nullptr) {
-              t.rest_far = RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]);
-              t.w0 = w0;
-              t.w1 = w1;
+              t.rest_far = static_cast<std::int16_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
+              t.part = static_cast<std::int8_t>(part);
+              t.parts = static_cast<std::int8_t>(parts);
             }
             for (int j = 0; j < 3; ++j) {
-              t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i);
+              t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i) / jmax;
               t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
             }
             c.templates->jerk_rows.push_back(t);

@@ -228,9 +228,9 @@ class JerkCoefficients {
   explicit JerkCoefficients(const std::vector<double>& linearization)
       : linearization_(linearization), floor_(internal::LinearizationFloor(linearization)) {}
   std::array<double, 3> operator()(const internal::JerkRowTemplate& t) {
-    if (t.g0 != g0_ || t.w0 != w0_) {
+    if (t.g0 != g0_ || t.part != part_) {
       g0_ = t.g0;
-      w0_ = t.w0;
+      part_ = t.part;
       const size_t g = static_cast<size_t>(t.g0);
       const double lb[3] = {linearization_[g], linearization_[g + 1], linearization_[g + 2]};
       double bbar = 0.0;
@@ -238,20 +238,19 @@ class JerkCoefficients {
         bbar = internal::LinearizationPoint(lb, floor_);
       } else {
         const double alpha = lb[1], far = lb[t.rest_far];
-        bbar = std::max({alpha + (far - alpha) * t.w0, alpha + (far - alpha) * t.w1, floor_});
+        bbar = std::max({alpha + (far - alpha) * t.w0(), alpha + (far - alpha) * t.w1(), floor_});
       }
       root_ = 2.0 * std::sqrt(bbar) / 3.0;
       cb_ = 1.0 / (3.0 * bbar);
     }
-    const double ca = root_ / t.jmax;
-    return {t.a[0] * ca + t.basis[0] * cb_, t.a[1] * ca + t.basis[1] * cb_, t.a[2] * ca + t.basis[2] * cb_};
+    return {t.a[0] * root_ + t.basis[0] * cb_, t.a[1] * root_ + t.basis[1] * cb_, t.a[2] * root_ + t.basis[2] * cb_};
   }
 
  private:
   const std::vector<double>& linearization_;
   double floor_;
   int g0_ = -1;
-  double w0_ = 0.0;
+  int part_ = -1;
   double root_ = 0.0, cb_ = 0.0;
 };
 
@@ -490,8 +489,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     keep.assign(p.rows.size(), 0);
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
     // takes all of them; one from the coarse programme's jerk-limited answer only those near
-    // their bound there. Candidates join as d's rows would: essential (H <= 0), near their bound,
-    // or over a loose control.
+    // their bound there. Template rows join as d's rows would: essential (H <= 0), near their
+    // bound, or over a loose control.
     PadForRows(y, &padded);
     for (size_t r = 0; r < p.rows.size(); ++r) {
       keep[r] = p.essential[r] || p.rows[r].PaddedValue(padded.data()) >= fraction * p.h[r] ||
