@@ -285,6 +285,27 @@ TEST(JerkProfile, InCellIsAtSInsideACellAndItsOwnStateAtItsEnds) {
   }
 }
 
+// InCellSamples forms a cell once for its samples: the same formulas as InCell at each sample, so
+// the same values bit for bit, on every shape of cell (rest, quadratic).
+TEST(JerkProfile, InCellSamplesAreInCellAtEachSample) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+    const int n = 7;
+    std::vector<TemporalProfile::Point> samples(n + 1);
+    for (int i = 0; i < profile.num_pieces(); ++i) {
+      for (int k = 0; k < profile.cells_per_piece(); ++k) {
+        profile.InCellSamples(i, k, n, samples.data());
+        for (int j = 0; j <= n; ++j) {
+          const TemporalProfile::Point p = profile.InCell(i, k, (static_cast<double>(j) / n) * profile.CellLength(i, k));
+          EXPECT_EQ(samples[j].s, p.s) << "piece " << i << " cell " << k << " sample " << j;
+          EXPECT_EQ(samples[j].sdot, p.sdot) << "piece " << i << " cell " << k << " sample " << j;
+          EXPECT_EQ(samples[j].sddot, p.sddot) << "piece " << i << " cell " << k << " sample " << j;
+          EXPECT_EQ(samples[j].sdddot, p.sdddot) << "piece " << i << " cell " << k << " sample " << j;
+        }
+      }
+    }
+  }
+}
+
 TEST(JerkProfile, SddotIsContinuousAndRestEndsAreAtRest) {
   const TemporalProfile profile = SmoothRestToRest();
   const double T = profile.total_time();
