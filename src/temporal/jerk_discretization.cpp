@@ -1086,9 +1086,9 @@ TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& pro
   // Room for a regular cell's rows at the curve's largest degree, so that the vectors seldom grow
   // (each growth copied them and touched fresh pages: on the default plan both grew once): with
   // f' of degree dq, 3 (2 dq + 3) velocity and 6 (dq + 2) acceleration rows at most, and 6 (dq + 1)
-  // jerk templates, and a few hundred more for rest cells (whose polynomials in w have about three
-  // times the degree: on the benchmark's cubics their two rest cells took 54 and 156 more than
-  // this room without them, so the vectors grow once there, in a solver's first solve).
+  // jerk templates, and 256 more of each for rest cells, whose polynomials in w have about three
+  // times the degree (on the benchmark's cubics their two rest cells took 54 and 156 more); where a
+  // curve has more, the vectors grow in a solver's first solve only (it keeps them).
   int dq = 0;
   for (int i = 0; i < problem.curve.num_pieces(); ++i) dq = std::max(dq, problem.curve.piece(i).degree() - 1);
   const size_t cells = static_cast<size_t>(problem.curve.num_pieces()) * static_cast<size_t>(problem.cells_per_piece);
