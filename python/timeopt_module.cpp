@@ -79,6 +79,22 @@ Eigen::Vector3d Vec3(const py::handle& value, const char* name, bool broadcast =
   return Eigen::Vector3d(a.data()[0], a.data()[1], a.data()[2]);
 }
 
+// A cell count K: a Python int (numpy integers too; not a bool or a float) in [1, max], or a
+// ValueError naming `name` (pybind's own conversion raised TypeError for 2.5 and took -1).
+int CellCount(const py::handle& value, const char* name, int max = kMaxCellsPerPiece) {
+  const auto fail = [&](const std::string& got) {
+    return py::value_error(std::string(name) + ": expected an integer in [1, " + std::to_string(max) + "], got " + got);
+  };
+  if (value.is_none() || PyBool_Check(value.ptr()) || !PyIndex_Check(value.ptr())) {
+    throw fail(std::string(py::str(py::repr(value))));
+  }
+  const py::int_ integer(py::reinterpret_borrow<py::object>(value));
+  int overflow = 0;
+  const long long k = PyLong_AsLongLongAndOverflow(integer.ptr(), &overflow);
+  if (overflow != 0 || k < 1 || k > max) throw fail(py::repr(integer).cast<std::string>());
+  return static_cast<int>(k);
+}
+
 // Points as an (N, 3) array (one point of shape (3,) is N = 1).
 Eigen::Matrix3Xd Points(const py::handle& value, const char* name) {
   const auto a = AsDoubles(value, name);
@@ -244,7 +260,7 @@ PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margi
     } else if (key == "safety_margin") {
       o.safety_margin = value.cast<double>();
     } else if (key == "K") {
-      o.temporal_cells_per_piece = value.cast<int>();
+      o.temporal_cells_per_piece = CellCount(value, "K");
     } else if (key == "constraint_mode") {
       o.constraint_mode = ModeFrom(value.cast<std::string>());
     } else if (key == "start_velocity") {
@@ -476,13 +492,13 @@ PYBIND11_MODULE(timeopt, m) {
   py::class_<TemporalProblem>(m, "TemporalProblem",
                               "The temporal problem (docs/temporal.md): a curve, limits, boundary velocities and accelerations, "
                               "K cells per piece, the constraint mode and rho.")
-      .def(py::init([](const PiecewiseCurve& curve, const VehicleLimits& limits, int K, const std::string& mode, double rho,
+      .def(py::init([](const PiecewiseCurve& curve, const VehicleLimits& limits, const py::object& K, const std::string& mode, double rho,
                        const py::object& start_velocity, const py::object& end_velocity,
                        const py::object& start_acceleration, const py::object& end_acceleration, bool relax_boundary) {
              TemporalProblem p;
              p.curve = curve;
              p.limits = limits;
-             p.cells_per_piece = K;
+             p.cells_per_piece = CellCount(K, "K");
              p.constraint_mode = ModeFrom(mode);
              p.rho = rho;
              if (!start_velocity.is_none()) p.boundary.start_velocity = Vec3(start_velocity, "start_velocity");
@@ -498,7 +514,9 @@ PYBIND11_MODULE(timeopt, m) {
            py::arg("end_acceleration") = py::none(), py::arg("relax_boundary") = false)
       .def_readwrite("curve", &TemporalProblem::curve)
       .def_readwrite("limits", &TemporalProblem::limits)
-      .def_readwrite("K", &TemporalProblem::cells_per_piece)
+      .def_property(
+          "K", [](const TemporalProblem& p) { return p.cells_per_piece; },
+          [](TemporalProblem& p, const py::handle& v) { p.cells_per_piece = CellCount(v, "K"); })
       .def_readwrite("constraint_mode", &TemporalProblem::constraint_mode)
       .def_readwrite("rho", &TemporalProblem::rho)
       .def_readwrite("relax_boundary", &TemporalProblem::relax_boundary)

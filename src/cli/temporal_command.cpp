@@ -75,6 +75,8 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
                   const std::string& plot) {
   const auto solver = MakeTemporalSolver(ParseBackend(solver_name));
   const TemporalResult result = solver->Solve(problem);
+  // Refuse an over-long sample request before writing the result (not after printing it).
+  if (result.is_success() && !samples.empty()) Trajectory(problem.curve, result.profile).CheckSampleRate(rate);
   const std::string json = TemporalResultToJson(result);
   if (output.empty()) std::cout << json;
   else WriteTextFile(output, json);
@@ -184,6 +186,7 @@ int RunWaypoints(const WaypointsArgs& args) {
     if (result.scp_iterations > 0) std::cerr << ", " << result.scp_iterations << " convex solves";
     std::cerr << "\n";
   }
+  if (result.is_success()) Trajectory(problem.curve, result.profile).CheckSampleRate(args.rate);
   if (!result.is_success()) {
     WriteTextFile((dir / "result.json").string(), TemporalResultToJson(result));
     std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";

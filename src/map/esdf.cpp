@@ -1,6 +1,7 @@
 #include "timeopt/map/esdf.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
@@ -274,6 +275,28 @@ void CheckBudget(const VoxelBox& voxels, int64_t max_bytes) {
   throw std::invalid_argument(message.str());
 }
 
+// Marks the voxels of box's faces occupied where faces[2 axis + side] (side 0: the low face): a
+// region's cut faces, or every face of a box without an obstacle (there the box is the world and its
+// walls bound the distance, which would otherwise be unbounded).
+void OccupyFaces(const VoxelBox& box, const std::array<bool, 6>& faces, OccupancyGrid* grid) {
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side < 2; ++side) {
+      if (!faces[static_cast<size_t>(2 * axis + side)]) continue;
+      const int layer = side == 0 ? box.min(axis) : box.end()(axis) - 1;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Eigen::Vector3i index;
+      index(axis) = layer;
+      for (int i = box.min(u); i < box.end()(u); ++i) {
+        for (int j = box.min(v); j < box.end()(v); ++j) {
+          index(u) = i;
+          index(v) = j;
+          grid->Set(index, true);
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box, int64_t max_bytes) {
@@ -287,13 +310,19 @@ Esdf Esdf::FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBo
     voxels = map.KnownBox();
   }
   CheckBudget(voxels, max_bytes);
-  return Esdf(map.Rasterize(voxels));
+  OccupancyGrid grid = map.Rasterize(voxels);
+  if (grid.CountOccupied() == 0) OccupyFaces(voxels, {true, true, true, true, true, true}, &grid);
+  return Esdf(grid);
 }
 
 Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region, int64_t max_bytes) {
   if (map.empty()) throw std::invalid_argument("the map is empty (no known voxel)");
   const VoxelBox known = map.KnownBox();
-  const VoxelBox wanted = VoxelBox::Covering(region, map.resolution());
+  // The region clipped to the known box first, so that a region far larger than the map (a huge
+  // margin) is the map, not a box beyond the OctoMap key range.
+  const Eigen::AlignedBox3d known_metric = known.Metric(map.resolution());
+  const Eigen::AlignedBox3d clipped = region.intersection(known_metric);
+  const VoxelBox wanted = VoxelBox::Covering(clipped.isEmpty() ? region : clipped, map.resolution());
   VoxelBox box;
   box.min = wanted.min.cwiseMax(known.min);
   box.size = wanted.end().cwiseMin(known.end()) - box.min;
@@ -307,23 +336,13 @@ Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& reg
   CheckBudget(box, max_bytes);
   OccupancyGrid grid = map.Rasterize(box);
   // The cut faces: a face of the region strictly inside the known box.
+  std::array<bool, 6> cut{};
   for (int axis = 0; axis < 3; ++axis) {
-    for (int side = 0; side < 2; ++side) {
-      const bool cut = side == 0 ? box.min(axis) > known.min(axis) : box.end()(axis) < known.end()(axis);
-      if (!cut) continue;
-      const int layer = side == 0 ? box.min(axis) : box.end()(axis) - 1;
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      Eigen::Vector3i index;
-      index(axis) = layer;
-      for (int i = box.min(u); i < box.end()(u); ++i) {
-        for (int j = box.min(v); j < box.end()(v); ++j) {
-          index(u) = i;
-          index(v) = j;
-          grid.Set(index, true);
-        }
-      }
-    }
+    cut[2 * axis] = box.min(axis) > known.min(axis);
+    cut[2 * axis + 1] = box.end()(axis) < known.end()(axis);
   }
+  OccupyFaces(box, cut, &grid);
+  if (grid.CountOccupied() == 0) OccupyFaces(box, {true, true, true, true, true, true}, &grid);
   return Esdf(grid);
 }
 

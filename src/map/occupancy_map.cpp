@@ -31,6 +31,11 @@ namespace {
 // OctoMap's tree depth and key offset: key = index + 32768, 16 levels below the root.
 constexpr int kTreeDepth = 16;
 constexpr int kKeyOffset = 32768;
+// The resolutions a map may have, metres: beyond them a map's extent (65,536 voxels a side) or its
+// volumes (map info) leave the range of a double, or a voxel is below any sensor's resolution.
+constexpr double kMinResolution = 1e-6;
+constexpr double kMaxResolution = 1e6;
+bool ValidResolution(double r) { return r >= kMinResolution && r <= kMaxResolution; }
 
 constexpr const char* kBinaryFirstLine = "# Octomap OcTree binary file";
 constexpr const char* kFullFirstLine = "# Octomap OcTree file";
@@ -103,6 +108,11 @@ FileHeader ParseHeader(const std::string& content, const std::string& path) {
   if (header.size < 0) throw std::invalid_argument("'" + path + "': header has no valid 'size'");
   if (!(header.resolution > 0.0) || !std::isfinite(header.resolution)) {
     throw std::invalid_argument("'" + path + "': header has no positive 'res'");
+  }
+  if (!ValidResolution(header.resolution)) {
+    std::ostringstream message;
+    message << "'" << path << "': resolution " << header.resolution << " m is outside [1e-6, 1e6] m";
+    throw std::invalid_argument(message.str());
   }
   header.data_offset = pos;
   return header;
@@ -225,8 +235,10 @@ struct OccupancyMap::Impl {
 };
 
 OccupancyMap::OccupancyMap(double resolution, UnknownSpace unknown) : unknown_(unknown) {
-  if (!(resolution > 0.0) || !std::isfinite(resolution)) {
-    throw std::invalid_argument("map resolution must be positive and finite");
+  if (!ValidResolution(resolution)) {
+    std::ostringstream message;
+    message << "map resolution must be in [1e-6, 1e6] m, got " << resolution;
+    throw std::invalid_argument(message.str());
   }
   impl_ = std::make_unique<Impl>(resolution);
 }

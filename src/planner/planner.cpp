@@ -17,6 +17,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Metres: a goal this close to the start is the start.
+constexpr double kSamePoint = 1e-6;
+
 // PlanResult's min_interior_speed and min_curvature_radius (see planner.h): on a 10 ms grid more
 // than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature).
 void CurveQuality(PlanResult* result) {
@@ -253,6 +256,12 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   };
   std::string error;
   if (!options.IsValid(&error)) return finish(PlanStatus::kInvalidInput, "options." + error);
+  // A goal within a micrometre of the start (far below any map's resolution) leaves no curve to time.
+  if (start.allFinite() && goal.allFinite() && (goal - start).norm() <= kSamePoint) {
+    std::ostringstream message;
+    message << "start and goal are the same point (" << start.transpose() << "): there is no path to plan";
+    return finish(PlanStatus::kInvalidInput, message.str());
+  }
 
   // ---- front-end ----
   PathSearchOptions search = options.search;

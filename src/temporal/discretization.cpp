@@ -33,6 +33,11 @@ namespace {
 
 using namespace internal;
 
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The variable scale's cap over the largest squared speed the path allows (AssignGridValues): a
+// margin so wide that it never takes effect on problems whose velocity limit can bind.
+constexpr double kUnreachableSpeedShare = 1e6;
+
 // One row w . (b^k, b^{k+1}) <= 1 of a cell.
 struct CellRow {
   Eigen::Vector2d w;
@@ -364,12 +369,34 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
     }
     if (limits.max_acceleration_norm) aref = std::max(aref, *limits.max_acceleration_norm);
   }
+  // A velocity limit far above any speed the acceleration limits can reach on this path (1e300
+  // m/s, say) cannot bind, but its square overflowed the scale and the rows ("G has Inf"). The
+  // scale is capped at kUnreachableSpeedShare times the squared speed that the largest finite
+  // acceleration limit reaches over the whole path from the faster boundary speed: ordinary
+  // problems keep vref's scale.
+  double reach2 = kInf;
+  {
+    double accel = aref;
+    for (int a = 0; a < 3; ++a) {
+      if (std::isfinite(limits.max_acceleration(a))) accel = std::max(accel, limits.max_acceleration(a));
+    }
+    if (limits.max_acceleration_norm) accel = std::max(accel, *limits.max_acceleration_norm);
+    if (limits.max_thrust) accel = std::max(accel, *limits.max_thrust + limits.gravity);
+    double path = 0.0;
+    for (int i = 0; i < m; ++i) {
+      for (int k = 0; k < K; ++k) path += grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm() / K;
+    }
+    const double boundary2 = std::max(problem.boundary.start_velocity.squaredNorm(), problem.boundary.end_velocity.squaredNorm());
+    if (accel > 0.0 && std::isfinite(accel) && std::isfinite(path)) {
+      reach2 = kUnreachableSpeedShare * (boundary2 + 2.0 * accel * path);
+    }
+  }
   std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
   for (int i = 0; i < m; ++i) {
     double t_max = 0.0;
     for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
     if (!(t_max > problem.zero_tangent_tolerance)) continue;
-    double speed2 = vref * vref;
+    double speed2 = std::min(vref * vref, reach2);
     if (aref > 0.0) speed2 = std::min(speed2, aref * t_max);
     if (jref > 0.0) speed2 = std::min(speed2, std::cbrt(jref * jref * t_max * t_max * t_max * t_max));
     piece_scale[static_cast<size_t>(i)] = speed2 / (t_max * t_max);
@@ -584,6 +611,31 @@ void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscreti
   };
   check(problem.boundary.start_acceleration, "boundary.start_acceleration");
   check(problem.boundary.end_acceleration, "boundary.end_acceleration");
+  // From rest the vehicle must speed up along the tangent u (into rest: slow down, an acceleration
+  // along -u). With max_thrust T the largest acceleration along a unit direction w is
+  // -g w_z + sqrt(T^2 - g^2 (1 - w_z^2)): 0 for a level or climbing w when T = g (a hover at full
+  // thrust), where the conic solver could only run out of iterations.
+  if (!l.max_thrust) return;
+  const int m = problem.curve.num_pieces();
+  for (const bool end : {false, true}) {
+    const Eigen::Vector3d v = end ? problem.boundary.end_velocity : problem.boundary.start_velocity;
+    if (!v.isZero(0.0)) continue;
+    const Eigen::Vector3d f1 = problem.curve.Evaluate(end ? m - 1 : 0, end ? 1.0 : 0.0, 1);
+    if (!(f1.norm() > problem.zero_tangent_tolerance)) continue;
+    const Eigen::Vector3d w = (end ? -1.0 : 1.0) * f1.normalized();
+    const double g = l.gravity, T = *l.max_thrust;
+    const double room = T * T - g * g * (1.0 - w(2) * w(2));
+    const double largest = room >= 0.0 ? -g * w(2) + std::sqrt(room) : -1.0;
+    if (largest <= 1e-9 * std::max(g, 1.0)) {
+      std::ostringstream ss;
+      ss << "limits.max_thrust (" << T << " m/s^2) leaves no acceleration along the path at its "
+         << (end ? "end" : "start") << " (a hover takes " << g << " m/s^2 and the path's direction there, "
+         << (end ? -w : w).transpose() << ", is not " << (end ? "upward" : "downward") << "), so the vehicle cannot "
+         << (end ? "come to rest there" : "leave rest");
+      if (!d->infeasible_reason) d->infeasible_reason = ss.str();
+      return;
+    }
+  }
 }
 
 // Per cell and axis, the acceleration at the cell middle (eq. 40) as coefficients on

@@ -183,6 +183,10 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
 // The cells (problem.cells_per_piece per piece), and the verdict on a piece of one cell that must
 // start and end at rest.
 void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
+// The boundary states against the quadrotor's limits: their accelerations within them, and from
+// or into rest some acceleration along the path left (max_thrust = g on a level start leaves
+// none). Sets d->infeasible_reason if not.
+void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscretization* d);
 // Keeps, per variable, only the tightest row that bounds it alone, as its upper bound.
 void KeepTightestUpperBounds(TemporalDiscretization* d);
 // The boundary speeds made free (DiscretizeWithFreeBoundaries): for the start and the end, the

@@ -584,9 +584,14 @@ class IpoptTemporalSolver final : public TemporalSolver {
         // With linear rows and bounds a point of local infeasibility is a global one. The exact
         // jerk rows are not convex, so there Ipopt's verdict is only local.
         result->status = TemporalStatus::kInfeasible;
-        result->message = nonlinear ? "Ipopt: the limits cannot be met (converged to a point of local "
-                                      "infeasibility; the exact jerk rows are not convex, so this is a "
-                                      "local verdict)"
+        // The quadrotor's cones are convex, so with them (and no jerk rows) the verdict is global too.
+        result->message = !d.cubic_rows.empty()
+                              ? "Ipopt: the limits cannot be met (converged to a point of local "
+                                "infeasibility; the exact jerk rows are not convex, so this is a "
+                                "local verdict)"
+                              : !d.cone_rows.empty()
+                                    ? "Ipopt: the limits cannot be met (converged to a point of local "
+                                      "infeasibility of the linear rows and the quadrotor's convex cones)"
                                     : "Ipopt: the limits cannot be met (converged to a point of local "
                                       "infeasibility of the linear rows)";
         return;

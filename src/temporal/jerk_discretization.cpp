@@ -88,6 +88,12 @@ constexpr double kCurvedRestShare = 0.95;
 // +0.94%). Cells growing by 1.25 in length (edges whose ratio falls from 2.25 towards 1.25), as
 // before, left +0.81% and 8.
 constexpr double kRestGrading = 1.25;
+// The first cell of a braking start (BrakeCellSize), as a share of the longest that can brake, and
+// its smallest size relative to the nominal cell (a smaller one would not brake either; the grading
+// after it is capped at K / 3 cells).
+constexpr double kBrakeCellShare = 0.5;
+constexpr double kBrakePhaseShare = 1.0 / 8.0;
+constexpr double kSmallestBrakeCell = 1e-3;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
 constexpr double kLargestRestCell = 0.25;
@@ -782,7 +788,24 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
   if (quadrotor) AddQuadrotorCellRows(c, piece, k, speed, acceleration);
 }
 
-// The boundary acceleration at the start (end = false) or end of the path.
+// True when every point of `piece` lies on one line (its coefficients of degree >= 1 all parallel,
+// up to rounding), so that its derivatives of every order point along its tangent.
+bool StraightPiece(const PolynomialPiece& piece) {
+  const auto& c = piece.coefficients();
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 1; k < c.cols(); ++k) {
+    if (c.col(k).norm() > direction.norm()) direction = c.col(k);
+  }
+  if (!(direction.norm() > 0.0)) return false;
+  direction.normalize();
+  for (Eigen::Index k = 1; k < c.cols(); ++k) {
+    const Eigen::Vector3d v = c.col(k);
+    if ((v - v.dot(direction) * direction).norm() > 1e-12 * std::max(v.norm(), c.rightCols(c.cols() - 1).norm())) return false;
+  }
+  return true;
+}
+
+// The boundary acceleration at the start (end = false) or end of the path.// The boundary acceleration at the start (end = false) or end of the path.
 void AddBoundaryAcceleration(JerkContext& c, bool end) {
   const TemporalProblem& p = c.problem;
   const int m = p.curve.num_pieces();
@@ -815,6 +838,27 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
     }
     AddCellAcceleration(c, piece, k, end, 1.0);
     const double a = rest.dot(f1) / f1.squaredNorm();
+    if (!c.d.infeasible_reason && StraightPiece(p.curve.piece(piece))) {
+      // On a straight piece the jerk lies along the path, at most j_t = min over axes of j / |u|
+      // (u the unit tangent). A start braking at |a| (or an end reached while speeding up, in
+      // reverse) gets its acceleration back to 0 no sooner than |a| / j_t, and meanwhile slows by at
+      // least a^2 / (2 j_t): below that speed the vehicle would have to reverse.
+      const double speed = f1.norm();
+      const double a_path = (end ? 1.0 : -1.0) * a * speed;  // > 0: braking away from the end
+      double j = std::numeric_limits<double>::infinity();
+      for (int axis = 0; axis < 3; ++axis) {
+        if (std::abs(unit(axis)) > 1e-12) j = std::min(j, (*p.limits.max_jerk)(axis) / std::abs(unit(axis)));
+      }
+      const double v_path = std::sqrt(b) * speed;
+      if (a_path > 0.0 && std::isfinite(j) && v_path < a_path * a_path / (2.0 * j) * (1.0 - 1e-9)) {
+        std::ostringstream ss;
+        ss << field << " cannot be flown: at " << v_path << " m/s with " << a_path << " m/s^2 "
+           << (end ? "of speeding up into the end" : "of braking") << " along a straight path and a jerk limit of " << j
+           << " m/s^3 along it, the speed reaches 0 before the acceleration does (it needs at least "
+           << a_path * a_path / (2.0 * j) << " m/s)";
+        c.d.infeasible_reason = ss.str();
+      }
+    }
     c.boundary_sddot[end ? 1 : 0] = a;
     c.row.Finish(LinearRow::Kind::kBoundaryAcceleration, a, a, [&] { return field; });
     return;
@@ -940,6 +984,7 @@ struct RestSize {
   double cell = 0.0;  // the rest cell's length in s (0: none)
   bool halved = false;
   bool curved = false;  // a constant s-jerk over the cell keeps less than kCurvedRestShare somewhere
+  bool braking = false;  // not a rest cell: the first cell of a braking start (BrakeCellSize)
 };
 RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_to_rest) {
   RestSize r;
@@ -953,6 +998,53 @@ RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_t
     shares = RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell));
   }
   r.curved = std::min(shares.at_rest, shares.lowest) < kCurvedRestShare;
+  return r;
+}
+
+// The first cell of a start in motion that brakes along the path (sddot < 0 at b0 = sdot^2 > 0), or
+// the last one of an end reached while still speeding up: b falls from b0 with slope 2 sddot, and
+// a quadratic cell of length h keeps its middle Bernstein coefficient b0 - |sddot| h (the row
+// b >= 0) non-negative only while h <= b0 / |sddot|. A longer cell cannot brake at all: a start at
+// 0.5 m/s braking at 2 m/s^2 with a jerk limit of 10 (flyable: it slows to 0.3 m/s) was called
+// infeasible at K = 50 on a 10 m line (cells of 0.2 m against 0.125 m). So that cell is
+// kBrakeCellShare of the bound, and the cells after it grow as after a halved rest cell. None
+// (cell 0) where the end does not brake or the bound is a nominal cell or more.
+RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
+  RestSize r;
+  const Eigen::Vector3d v = end ? p.boundary.end_velocity : p.boundary.start_velocity;
+  const Eigen::Vector3d acc = end ? p.boundary.end_acceleration : p.boundary.start_acceleration;
+  const Eigen::Vector3d f1 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 1), f2 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 2);
+  const double t2 = f1.squaredNorm();
+  if (!(std::sqrt(t2) > p.zero_tangent_tolerance) || !(v.squaredNorm() > 0.0)) return r;
+  const double b = v.squaredNorm() / t2;
+  const double sddot = (acc - f2 * b).dot(f1) / t2;
+  const double slope_against = end ? sddot : -sddot;  // > 0: b falls away from the end
+  if (!(slope_against > 0.0) || !std::isfinite(b / slope_against)) return r;
+  // The braking phase along the tangent: the jerk limit along it brings sddot back to 0 in
+  // t = |a| / j, over v t - |a| t^2 / 2 + j t^3 / 6 metres; in a quadratic cell the s-jerk is at
+  // most j / (the cell's largest sdot), so that phase needs cells of a fraction of its length.
+  double j = std::numeric_limits<double>::infinity();
+  const double speed = std::sqrt(t2);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(f1(axis)) > 1e-12 * speed) j = std::min(j, (*p.limits.max_jerk)(axis) * speed / std::abs(f1(axis)));
+  }
+  const double a_path = slope_against * speed, v_path = std::sqrt(b) * speed;  // m/s^2, m/s
+  const double must = kBrakeCellShare * b / slope_against;
+  double h = must;
+  if (std::isfinite(j) && j > 0.0) {
+    const double t = a_path / j;
+    const double phase = std::max(0.0, v_path * t - 0.5 * a_path * t * t + j * t * t * t / 6.0) / speed;
+    h = std::min(h, kBrakePhaseShare * phase);
+  }
+  if (!(h > 0.0) || !(h < 1.0 / K)) return r;
+  // Where a nominal cell can brake, only if the grading back to it takes at most K / 6 cells: they
+  // come from the rest of the piece (at K = 20, 1 m/s braking at 1 m/s^2 on a 10 m line took 4.16 s
+  // with 6 graded cells, 4.00 s without; at K = 200, 0.5 m/s at 2 m/s^2 took 4.29 s without them,
+  // 4.23 s with them).
+  if (!(must < 1.0 / K) && std::log(1.0 / (K * h)) / std::log(kRestGrading) > K / 6.0) return r;
+  r.cell = h;
+  r.halved = true;
+  r.braking = true;
   return r;
 }
 
@@ -970,7 +1062,7 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
     double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
     if (rest.halved || (rest.curved && h > ds)) {
-      g.push_back(std::min({std::max(h, kSmallestRestCell * ds), ds, kLargestRestCell}));
+      g.push_back(std::min({std::max(h, (rest.braking ? kSmallestBrakeCell : kSmallestRestCell) * ds), ds, kLargestRestCell}));
       // Cells from edge e to kRestGrading e: each kRestGrading - 1 times the s already covered.
       for (double next = g.back() * (kRestGrading - 1.0); next < ds && static_cast<int>(g.size()) < K / 3;
            next *= kRestGrading) {
@@ -1138,6 +1230,7 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   StopWhereCurvatureJumps(problem, &d);
   internal::AssignGridValues(half, &d);
   internal::MakeCells(half, &d);
+  internal::CheckBoundaryAccelerations(problem, &d);
 
   JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, 0.0, {}, templates, -1, {}, {}, {}};
   if (linearization != nullptr) c.bbar_floor = internal::LinearizationFloor(*linearization);
@@ -1171,8 +1264,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
     const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
     d.cell_edges[static_cast<size_t>(i)] =
-        CellEdges(K, rest_start ? RestCellSize(problem, i, false, rest_end) : RestSize(),
-                  rest_end ? RestCellSize(problem, i, true, rest_start) : RestSize());
+        CellEdges(K, rest_start ? RestCellSize(problem, i, false, rest_end) : i == 0 ? BrakeCellSize(problem, i, false, K) : RestSize(),
+                  rest_end ? RestCellSize(problem, i, true, rest_start) : i == m - 1 ? BrakeCellSize(problem, i, true, K) : RestSize());
     for (int k = 0; k < K; ++k) {
       const double half = 0.5 * c.Len(i, k);
       d.cells[static_cast<size_t>(2 * (i * K + k))].ds = half;

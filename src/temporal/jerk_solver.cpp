@@ -292,6 +292,65 @@ std::vector<double> GridValues(const TemporalDiscretization& d, const std::vecto
   return b;
 }
 
+// A braking start (or an end reached while speeding up) as the first linearization point. The
+// jerk-free guess keeps its speed where the vehicle must first bring its acceleration back to 0 at
+// the jerk limit and slow down meanwhile; linearized there, the jerk rows (tangents of 1 / sqrt(b)
+// at the guess's larger b) had no solution for a start at 0.25 m/s braking at 2 m/s^2 with a jerk
+// limit of 10, which can be flown (it slows to 0.05 m/s). So b near such an end is capped by the
+// fastest motion along the tangent from that state: the jerk at its limit along the tangent raises
+// the acceleration from a0 < 0 (speed v0 + a0 t + j t^2 / 2), and keeps raising it. Only a starting
+// point: the rows are conservative at any linearization point.
+void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d, std::vector<double>* b) {
+  if (!p.limits.max_jerk || b->size() != d.grid.size() || d.cell_edges.empty()) return;
+  const int m = d.num_pieces, half = d.cells_per_piece, full = half / 2;
+  for (const bool end : {false, true}) {
+    const int piece = end ? m - 1 : 0;
+    const double at = end ? 1.0 : 0.0;
+    const Eigen::Vector3d v = end ? p.boundary.end_velocity : p.boundary.start_velocity;
+    const Eigen::Vector3d acc = end ? p.boundary.end_acceleration : p.boundary.start_acceleration;
+    const Eigen::Vector3d f1 = p.curve.Evaluate(piece, at, 1), f2 = p.curve.Evaluate(piece, at, 2);
+    const double speed = f1.norm();
+    if (!(speed > p.zero_tangent_tolerance) || !(v.squaredNorm() > 0.0)) continue;
+    const Eigen::Vector3d unit = f1 / speed;
+    const double v0 = v.norm();
+    // The acceleration along the path, away from the end (time runs backwards from an end).
+    const double a0 = (end ? -1.0 : 1.0) * (acc - f2 * (v.squaredNorm() / (speed * speed))).dot(unit);
+    if (!(a0 < 0.0)) continue;
+    double j = std::numeric_limits<double>::infinity();
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::abs(unit(axis)) > 1e-12) j = std::min(j, (*p.limits.max_jerk)(axis) / std::abs(unit(axis)));
+    }
+    if (!std::isfinite(j) || !(j > 0.0)) continue;
+    // Speed against distance along the tangent: time for distance by bisection on the monotone
+    // s(t) = v0 t + a0 t^2 / 2 + j t^3 / 6 while the speed stays >= 0 (its minimum at t = -a0 / j).
+    const double t_low = -a0 / j;
+    const double v_low = v0 + a0 * t_low + 0.5 * j * t_low * t_low;
+    const auto speed_at = [&](double distance) {
+      if (v_low <= 0.0) return 0.0;
+      double lo = 0.0, hi = 1.0;
+      const auto s_of = [&](double t) { return v0 * t + 0.5 * a0 * t * t + j * t * t * t / 6.0; };
+      while (s_of(hi) < distance && hi < 1e12) hi *= 2.0;
+      for (int n = 0; n < 60; ++n) {
+        const double mid = 0.5 * (lo + hi);
+        (s_of(mid) < distance ? lo : hi) = mid;
+      }
+      const double t = 0.5 * (lo + hi);
+      return v0 + a0 * t + 0.5 * j * t * t;
+    };
+    const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(piece)];
+    for (int jh = 0; jh <= half; ++jh) {
+      const int h = end ? half - jh : jh;
+      const int k = std::min(h / 2, full - 1);
+      const double s = edges[static_cast<size_t>(k)] + 0.5 * (h - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
+      const double distance = speed * (end ? 1.0 - s : s);
+      const double cap = speed_at(distance) / speed;
+      double& value = (*b)[static_cast<size_t>(d.GridIndex(piece, h))];
+      if (value <= cap * cap) break;  // the guess is below the fastest motion from here on
+      if (d.grid[static_cast<size_t>(d.GridIndex(piece, h))].var >= 0) value = cap * cap;
+    }
+  }
+}
+
 // The profile of b at every half-grid value of the jerk-limited d (std::invalid_argument for
 // values that make none).
 TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b) {
@@ -920,7 +979,9 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       internal::BandedIpmSettings coarse_settings = settings;
       coarse_settings.tolerance = std::max(settings.tolerance, kCoarseTolerance);
       coarse_settings.gap_tolerance = std::max(settings.gap_tolerance, kCoarseTolerance);
-      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, GridValues(dc, guess), coarse_settings, false, &workspace, &scp);
+      std::vector<double> coarse_first = GridValues(dc, guess);
+      CapAtBrakingEnds(coarse, dc, &coarse_first);
+      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, std::move(coarse_first), coarse_settings, false, &workspace, &scp);
       build_time += scp.build_seconds;
       solve_time += scp.solve_seconds;
       iterations += scp.iterations;
@@ -966,7 +1027,10 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
         // benchmark's curves).
         const std::vector<double> guess =
             jerk_free_guess(d, std::max(2, (problem.cells_per_piece + 1) / kGuessCoarsening), ConstraintMode::kPaper);
-        return guess.empty() ? std::vector<double>() : GridValues(d, guess);
+        if (guess.empty()) return std::vector<double>();
+        std::vector<double> b = GridValues(d, guess);
+        CapAtBrakingEnds(problem, d, &b);
+        return b;
       };
       if (!jerk_aware) first = jerk_free_start();
       if (!first.empty()) {

@@ -1,6 +1,7 @@
 #include "timeopt/trajectory/trajectory.h"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -30,13 +31,22 @@ TrajectoryState Trajectory::Evaluate(double t) const {
   return x;
 }
 
-std::vector<TrajectoryState> Trajectory::Sample(double rate_hz) const {
+void Trajectory::CheckSampleRate(double rate_hz) const {
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) {
     throw std::invalid_argument("Trajectory::Sample: rate must be a positive number of Hz");
   }
   const double T = duration();
+  if (!(std::floor(T * rate_hz) <= kMaxSamples)) {
+    std::ostringstream os;
+    os << "Trajectory::Sample: " << T << " s at " << rate_hz << " Hz is more than 1e8 samples (lower the rate)";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+std::vector<TrajectoryState> Trajectory::Sample(double rate_hz) const {
+  CheckSampleRate(rate_hz);
+  const double T = duration();
   const double count = std::floor(T * rate_hz);
-  if (count > 1e8) throw std::invalid_argument("Trajectory::Sample: more than 1e8 samples");
   std::vector<TrajectoryState> out;
   out.reserve(static_cast<size_t>(count) + 2);
   for (long i = 0; i <= static_cast<long>(count); ++i) {

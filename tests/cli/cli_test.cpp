@@ -155,6 +155,37 @@ double JsonNumber(const std::string& json, const std::string& key) { return Json
 // examples/line_problem.json is a 10 m line, vmax 2, amax 1, rest to rest: T = L/v + v/a = 7 s in
 // closed form, and with rho = 0 the SOCP's optimal value is T. The exported file, read back and
 // solved by `timeopt conic`, must give it; 1e-7 is the solver's 1e-8 tolerances with room for T ~ 7.
+TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
+  // 7 s at 1e8 Hz is 7e8 samples, above the cap of 1e8: one line and exit 2, and no result on
+  // stdout (it was printed first, then the samples failed).
+  const std::string line = std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json";
+  CliRun r = RunCli("temporal " + line + " --samples " + Path("s.csv") + " --rate 1e8", "2>" + Path("err.txt"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.output, "");
+  EXPECT_THAT(ReadTextFile(Path("err.txt")), HasSubstr("more than 1e8 samples"));
+  EXPECT_FALSE(std::filesystem::exists(Path("s.csv")));
+  // The same plan with start == goal: a message that says so, not the temporal stage's "zero length".
+  r = RunCli("plan --start 1,1,1.5 --goal 1,1,1.5 -q");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("start and goal are the same point"));
+}
+
+TEST_F(CliTest, AnObstacleFreeMapIsPlannedInsideItsBox) {
+  // A 10 x 10 x 3 m map without a tree: the distance field's box faces bound it, so the plan
+  // succeeds, with a margin far larger than the map clipped to it, and keeps the robot radius
+  // (0.3 m) plus its margin from the box's walls.
+  CliRun r = RunCli("map generate forest --density 0 --bounds 0 0 0 10 10 3 -o " + Path("empty.bt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const std::string extra : {"", " --whole-map", " --region-margin 1e9"}) {
+    r = RunCli("plan --map " + Path("empty.bt") + " --start 1,1,1.5 --goal 9,9,1.5 -q -o " + Path("p.csv") + extra);
+    EXPECT_EQ(r.exit_code, 0) << extra << ": " << r.output;
+  }
+  // A map whose resolution is absurd is refused when read, naming the range.
+  r = RunCli("map generate forest --density 0 --resolution 1e300 --bounds 0 0 0 1e300 1e300 1e300 -o " + Path("huge.bt"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("[1e-6, 1e6]"));
+}
+
 TEST_F(CliTest, TemporalExportsItsSocpAndConicSolvesItToTheClosedForm) {
   CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json" +
                     " --export-cbf " + Path("line.cbf") + " -o " + Path("r.json"));

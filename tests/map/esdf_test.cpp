@@ -328,6 +328,31 @@ TEST(EsdfTest, AMemoryBudgetRefusesFieldsAboveItBeforeBuilding) {
   EXPECT_THROW(Esdf::FromMapRegion(forest.map, region, 60 * 80 * 30 * 9 - 1), std::invalid_argument);
 }
 
+TEST(EsdfTest, AnObstacleFreeMapIsBoundedByItsFaces) {
+  // A 10 x 10 x 3 m map with no tree: its distance field would be unbounded, so its box's faces
+  // count as occupied. Truth: a voxel centre's distance to the nearest face layer is that of its
+  // index to the layer, in voxels (the field is exact on the lattice, up to float storage).
+  ForestOptions forest;
+  forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 10, 3));
+  forest.density = 0.0;
+  const OccupancyMap map = OccupancyMap::FromGrid(GenerateForest(forest));
+  for (const bool region : {false, true}) {
+    // A region far larger than the map (a margin of 1e9 m) is the whole map.
+    const Esdf esdf = region ? Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-1e9),
+                                                                           Eigen::Vector3d::Constant(1e9)))
+                             : Esdf::FromMap(map);
+    const VoxelBox box = esdf.box();
+    ASSERT_EQ(box.size, Eigen::Vector3i(100, 100, 30)) << "region " << region;
+    for (const Eigen::Vector3i& v : {Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(3, 40, 20), Eigen::Vector3i(60, 97, 10)}) {
+      const Eigen::Vector3i from_low = v - box.min, from_high = box.end() - Eigen::Vector3i::Ones() - v;
+      const double voxels = std::min(from_low.minCoeff(), from_high.minCoeff());
+      // A free centre k voxels from an occupied layer: the zero level set lies half a voxel out.
+      EXPECT_NEAR(esdf.VoxelDistance(v), (voxels - 0.5) * map.resolution(), kFloatStorageTolerance)
+          << v.transpose() << " region " << region;
+    }
+  }
+}
+
 TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
   const test_support::ForestFixture forest(4, 0.15);
   const Esdf whole = Esdf::FromMap(forest.map);

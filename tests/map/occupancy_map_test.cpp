@@ -4,6 +4,7 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -202,8 +203,14 @@ TEST(OccupancyMapTest, EmptyMapAndZeroSizeBoxGiveClearErrors) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("empty"), std::string::npos) << e.what();
   }
+  // No obstacle in the box (every voxel unknown, counted free): its faces bound the field, so a
+  // voxel centre k voxels from the nearest face is (k - 1/2) voxels from the obstacles.
   const Eigen::AlignedBox3d box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
-  EXPECT_THROW(Esdf::FromMap(map, box), std::invalid_argument);  // no obstacle in the box
+  const Esdf bounded = Esdf::FromMap(map, box);
+  const VoxelBox b = bounded.box();
+  const Eigen::Vector3i centre = b.min + b.size / 2;
+  const int k = std::min((centre - b.min).minCoeff(), (b.end() - Eigen::Vector3i::Ones() - centre).minCoeff());
+  EXPECT_NEAR(bounded.VoxelDistance(centre), (k - 0.5) * bounded.resolution(), 1e-6);
   const OccupancyMap boxes = OccupancyMap::FromGrid(SmallBoxes(5));
   try {
     Esdf::FromMap(boxes, Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 1, 0)));

@@ -140,6 +140,17 @@ def test_bad_shapes_and_types_are_clear_exceptions():
     with pytest.raises(ValueError, match="K"):
         timeopt.parse_problem('{"curve": {"pieces": [{"x": [0, 1], "y": [0, 0], "z": [0, 0]}]}, '
                               '"limits": {"max_velocity": 2, "max_acceleration": 1}, "discretization": {"K": 2.5}}')
+    # K: an integer in [1, 100000], else ValueError (in the constructor, the attribute and plan's keyword).
+    curve = timeopt.load_problem(LINE).curve
+    for bad in (2.5, "a", None, float("nan"), True, -1, 0, 100001, 10**20):
+        with pytest.raises(ValueError, match=r"K: expected an integer in \[1, 100000\]"):
+            timeopt.TemporalProblem(curve, K=bad)
+        with pytest.raises(ValueError, match=r"K: expected an integer in \[1, 100000\]"):
+            problem.K = bad
+    with pytest.raises(ValueError, match=r"K: expected an integer"):
+        timeopt.plan(FOREST, [1, 1, 1.5], [19, 19, 1.5], K=2.5)
+    problem.K = np.int64(40)
+    assert problem.K == 40 and timeopt.TemporalProblem(curve, K=7).K == 7
     # float32 and integer input are converted, not refused.
     limits = timeopt.Limits(max_velocity=np.array([1, 2, 3], dtype=np.int32), max_acceleration=np.float32(1.5))
     np.testing.assert_array_equal(limits.max_velocity, [1.0, 2.0, 3.0])

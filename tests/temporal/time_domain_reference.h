@@ -153,9 +153,11 @@ inline Dual Polynomial(const Eigen::RowVectorXd& c, const Dual& s) {
 
 }  // namespace time_domain
 
-// The rest-to-rest optimum along `piece` with per-axis limits v, a, j on N intervals.
+// The optimum along `piece` with per-axis limits v, a, j on N intervals, to rest at its end, from
+// rest or from the state (sdot, sddot) = (start_sdot, start_sddot) at s = 0 (a start in motion).
 inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece, const Eigen::Vector3d& v,
-                                                    const Eigen::Vector3d& a, const Eigen::Vector3d& j, int N) {
+                                                    const Eigen::Vector3d& a, const Eigen::Vector3d& j, int N,
+                                                    double start_sdot = 0.0, double start_sddot = 0.0) {
   using time_domain::Dual;
   using time_domain::kLocals;
   using time_domain::Row;
@@ -224,12 +226,14 @@ inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece
     }
   }
 
-  // Bounds: rest at both ends, s in [0, 1], sdot >= 0, T > 0.
+  // Bounds: rest at the end (and the start unless given), s in [0, 1], sdot >= 0, T > 0.
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> lo(nvar, -inf), hi(nvar, inf);
   lo[0] = 1e-6;
   for (int n = 0; n <= N; ++n) lo[S(n)] = 0.0, hi[S(n)] = 1.0, lo[S(n) + 1] = 0.0;
-  for (int k = 0; k < 3; ++k) lo[S(0) + k] = hi[S(0) + k] = 0.0;
+  lo[S(0)] = hi[S(0)] = 0.0;
+  lo[S(0) + 1] = hi[S(0) + 1] = start_sdot;
+  lo[S(0) + 2] = hi[S(0) + 2] = start_sddot;
   lo[S(N)] = hi[S(N)] = 1.0;
   lo[S(N) + 1] = hi[S(N) + 1] = lo[S(N) + 2] = hi[S(N) + 2] = 0.0;
 
@@ -247,6 +251,8 @@ inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece
     x0[S(n) + 1] = 140.0 * q3 * (1.0 - q) * (1.0 - q) * (1.0 - q) / T0;
     x0[S(n) + 2] = 420.0 * q * q * (1.0 - q) * (1.0 - q) * (1.0 - 2.0 * q) / (T0 * T0);
   }
+  x0[S(0) + 1] = start_sdot;
+  x0[S(0) + 2] = start_sddot;
   for (int n = 0; n < N; ++n) x0[U(n)] = (x0[S(n + 1) + 2] - x0[S(n) + 2]) / (T0 / N);
 
   Ipopt::SmartPtr<time_domain::Nlp> nlp = new time_domain::Nlp(std::move(rows), std::move(x0), std::move(lo), std::move(hi));

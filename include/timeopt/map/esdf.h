@@ -92,7 +92,9 @@ class Esdf final : public DistanceField {
   static int64_t PeakBytes(const VoxelBox& voxels) { return voxels.num_voxels() * kPeakBytesPerVoxel; }
 
   // Builds the field over `box` (metres, snapped outwards to the voxel lattice) or, without a
-  // box, over the map's known box; unknown voxels count as the map's unknown_space() says.
+  // box, over the map's known box; unknown voxels count as the map's unknown_space() says. A box
+  // without an occupied voxel gets occupied faces: its walls bound the distance (otherwise
+  // unbounded), so an obstacle-free map keeps a vehicle inside the mapped volume.
   // max_bytes > 0 is a memory budget: a field whose PeakBytes exceed it is refused before any
   // allocation (std::invalid_argument with both figures). Throws std::invalid_argument for an
   // empty map without a box, a box of zero size, and the cases of the grid constructor.
@@ -103,7 +105,8 @@ class Esdf final : public DistanceField {
   // lattice) clipped to the map's known box. Where the region cuts the map, its outermost voxel
   // layer counts as occupied, so the field never exceeds the full map's field (obstacles beyond a
   // cut are at least as far as the cut) and equals it wherever the nearest obstacle is closer than
-  // the cut; a planner that keeps its clearance in this field keeps it in the whole map. Memory
+  // the cut; a planner that keeps its clearance in this field keeps it in the whole map. A region
+  // far larger than the map is the map. Without an occupied voxel, as FromMap. Memory
   // and time scale with the region, not the map. Throws std::invalid_argument for an empty map,
   // a region that does not overlap the known box or has zero size, and the cases of the grid
   // constructor; max_bytes as for FromMap.

@@ -42,8 +42,8 @@ enum class VoxelState { kUnknown, kFree, kOccupied };
 
 class OccupancyMap {
  public:
-  // An empty map (every voxel unknown). Throws std::invalid_argument for a non-positive or
-  // non-finite resolution (metres).
+  // An empty map (every voxel unknown). Throws std::invalid_argument for a resolution (metres)
+  // outside [1e-6, 1e6] (Load refuses such files too).
   explicit OccupancyMap(double resolution, UnknownSpace unknown = UnknownSpace::kFree);
   ~OccupancyMap();
   OccupancyMap(OccupancyMap&&) noexcept;

@@ -39,7 +39,13 @@ class Trajectory {
   // State at time t, clamped to [0, duration()].
   TrajectoryState Evaluate(double t) const;
   // States at t = 0, 1/rate, 2/rate, ... and at t = duration(). rate_hz > 0 (throws otherwise).
+  // At most kMaxSamples states (throws above it, before allocating).
   std::vector<TrajectoryState> Sample(double rate_hz) const;
+  // Throws std::invalid_argument where Sample(rate_hz) would (a rate that is not a positive
+  // number, or more than kMaxSamples states), so that a caller can refuse a request before it
+  // writes anything else.
+  void CheckSampleRate(double rate_hz) const;
+  static constexpr double kMaxSamples = 1e8;
 
  private:
   PiecewiseCurve curve_;

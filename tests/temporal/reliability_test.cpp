@@ -1,0 +1,160 @@
+// Problems a hostile probe found answered wrongly or not at all: limits that cannot bind, a hover
+// at full thrust, braking starts under a jerk limit, and the causes of jerk-limited infeasibility.
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "../common/fixtures.h"
+#include "time_domain_reference.h"
+#include "timeopt/temporal/temporal_solver.h"
+
+namespace timeopt {
+namespace {
+
+using ::testing::HasSubstr;
+using test_support::Segment;
+
+constexpr double kNone = std::numeric_limits<double>::infinity();
+
+// A 10 m line along x with per-axis limits a (and v, j when given), rest to rest.
+TemporalProblem Line(double v, double a, std::optional<double> j, int K, ConstraintMode mode) {
+  TemporalProblem p;
+  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 0, 0));
+  p.limits.max_velocity.setConstant(v);
+  p.limits.max_acceleration.setConstant(a);
+  if (j) p.limits.max_jerk = Eigen::Vector3d::Constant(*j);
+  p.cells_per_piece = K;
+  p.constraint_mode = mode;
+  return p;
+}
+
+TEST(Reliability, LimitsThatCannotBindLeaveTheAnswerWithoutThem) {
+  // A speed (or velocity) limit of 1e300 m/s squared to infinity in the rows ("G has Inf"). On a
+  // 10 m line at 3 m/s^2 the answer is the bang-bang T = 2 sqrt(10 / 3) s, which the paper's and
+  // the certified cells (b linear in s: constant acceleration) hold exactly; 1e-7 is the solvers'
+  // tolerance.
+  const double expected = 2.0 * std::sqrt(10.0 / 3.0);
+  for (const ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
+    for (const TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+      TemporalProblem speed = Line(kNone, 3.0, std::nullopt, 50, mode);
+      speed.limits.max_speed = 1e300;
+      TemporalProblem velocity = Line(1e300, 3.0, std::nullopt, 50, mode);
+      for (const TemporalProblem& p : {speed, velocity}) {
+        const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+        ASSERT_EQ(r.status, TemporalStatus::kOptimal) << ToString(mode) << " " << ToString(backend) << ": " << r.message;
+        EXPECT_NEAR(r.total_time / expected, 1.0, 1e-7) << ToString(mode) << " " << ToString(backend);
+      }
+    }
+  }
+}
+
+TEST(Reliability, AHoverAtFullThrustCannotLeaveRestOnALevelPath) {
+  // max_thrust = g: a level or climbing start has no acceleration along the path left (the conic
+  // solver ran out of iterations); a descending one has (up to 2 g |u_z|).
+  for (const bool jerk : {false, true}) {
+    for (const ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
+      TemporalProblem level = Line(4.0, 3.0, jerk ? std::optional<double>(10.0) : std::nullopt, 30, mode);
+      level.limits.max_thrust = level.limits.gravity;
+      const TemporalResult r = MakeSocpTemporalSolver()->Solve(level);
+      EXPECT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
+      EXPECT_THAT(r.message, HasSubstr("limits.max_thrust")) << r.message;
+      EXPECT_THAT(r.message, HasSubstr("cannot leave rest"));
+      TemporalProblem down = level;
+      down.curve = Segment(Eigen::Vector3d(0, 0, 10), Eigen::Vector3d(10, 0, 0));
+      // Into rest at the end the descending vehicle must brake upwards: more than a hover's thrust.
+      const TemporalResult d = MakeSocpTemporalSolver()->Solve(down);
+      EXPECT_EQ(d.status, TemporalStatus::kInfeasible) << d.message;
+      EXPECT_THAT(d.message, HasSubstr("cannot come to rest there"));
+      down.boundary.end_velocity = Eigen::Vector3d(1.0, 0.0, -1.0);  // leaves at speed: only the start counts
+      if (!jerk) {
+        const TemporalResult moving = MakeSocpTemporalSolver()->Solve(down);
+        EXPECT_EQ(moving.status, TemporalStatus::kOptimal) << moving.message;
+      }
+    }
+  }
+}
+
+TEST(Reliability, ABrakingStartThatCanBeFlownIsSolved) {
+  // 0.5 m/s braking at 2 m/s^2 with a jerk limit of 10 can be flown: the acceleration is back at 0
+  // after 0.2 s, at 0.3 m/s. It was called infeasible at K = 50 (a quadratic cell of 0.2 m cannot
+  // brake: its middle Bernstein coefficient b0 - |sddot| h is negative). Truth: the time-domain
+  // reference from that state (400 instants, within about 0.03% of the continuous optimum); the
+  // certified answer is flyable, so not below it, and within 1% at K = 50 and 200 (measured +0.53%
+  // and +0.52%: the profile class's loss on the cells through the braking phase; a uniform grid of
+  // K = 200 was +2.0%).
+  TemporalProblem p = Line(4.0, 3.0, 10.0, 50, ConstraintMode::kCertified);
+  p.boundary.start_velocity = Eigen::Vector3d(0.5, 0, 0);
+  p.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
+  const auto ref = test_support::SolveTimeDomainReference(p.curve.piece(0), p.limits.max_velocity, p.limits.max_acceleration,
+                                                          *p.limits.max_jerk, 400, 0.05, -0.2);
+  ASSERT_TRUE(ref.solved) << ref.message;
+  for (const int K : {50, 200}) {
+    p.cells_per_piece = K;
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << "K " << K << ": " << r.message;
+    std::printf("K = %d: T %.6f s, reference %.6f s (%+.3f%%)\n", K, r.total_time, ref.total_time,
+                100.0 * (r.total_time / ref.total_time - 1.0));
+    EXPECT_GE(r.total_time, ref.total_time * (1.0 - 1e-3)) << "K " << K;
+    EXPECT_LE(r.total_time, ref.total_time * 1.01) << "K " << K;
+    EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
+  }
+  // At 0.15 m/s the speed reaches 0 while still braking (it needs a^2 / (2 j) = 0.2 m/s): the
+  // vehicle would have to reverse. Infeasible, with the cause.
+  p.cells_per_piece = 50;
+  p.boundary.start_velocity = Eigen::Vector3d(0.15, 0, 0);
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
+  ASSERT_TRUE(r.infeasibility);
+  EXPECT_EQ(r.infeasibility->cause, "boundary_acceleration");
+  EXPECT_EQ(r.infeasibility->where, "start");
+  EXPECT_THAT(r.message, HasSubstr("it needs at least 0.2 m/s"));
+}
+
+TEST(Reliability, JerkLimitedInfeasibilityNamesItsCause) {
+  // The same causes as without a jerk limit (which only makes a problem harder): a start above the
+  // velocity limit, a start too fast to stop in 1 m (v 4, a 3: at most sqrt(2 a L) = 2.45 m/s
+  // without the jerk limit), a start acceleration above the limit.
+  TemporalProblem fast = Line(4.0, 3.0, 10.0, 30, ConstraintMode::kCertified);
+  fast.boundary.start_velocity = Eigen::Vector3d(10, 0, 0);
+  TemporalProblem brake = fast;
+  brake.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
+  brake.boundary.start_velocity = Eigen::Vector3d(3.5, 0, 0);
+  TemporalProblem accelerating = fast;
+  accelerating.boundary.start_velocity = Eigen::Vector3d(1, 0, 0);
+  accelerating.boundary.start_acceleration = Eigen::Vector3d(5, 0, 0);
+  const struct {
+    const TemporalProblem& problem;
+    const char* cause;
+  } cases[] = {{fast, "boundary_speed"}, {brake, "braking"}, {accelerating, "boundary_acceleration"}};
+  for (const auto& c : cases) {
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(c.problem);
+    ASSERT_EQ(r.status, TemporalStatus::kInfeasible) << c.cause << ": " << r.message;
+    ASSERT_TRUE(r.infeasibility) << c.cause;
+    EXPECT_EQ(r.infeasibility->cause, c.cause) << r.infeasibility->detail;
+  }
+}
+
+TEST(Reliability, IpoptNamesTheRowsItFailedOn) {
+  // Braking from 4 m/s within 1 m under an acceleration norm of 3 (no jerk limit): infeasible on
+  // the linear rows and the quadrotor's convex cones; nothing about jerk rows.
+  TemporalProblem p;
+  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
+  p.limits.max_velocity.setConstant(kNone);
+  p.limits.max_acceleration.setConstant(kNone);
+  p.limits.max_speed = 5.0;
+  p.limits.max_acceleration_norm = 3.0;
+  p.boundary.start_velocity = Eigen::Vector3d(4, 0, 0);
+  p.cells_per_piece = 30;
+  const TemporalResult r = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
+  EXPECT_THAT(r.message, ::testing::Not(HasSubstr("jerk")));
+}
+
+}  // namespace
+}  // namespace timeopt
