@@ -34,6 +34,9 @@
 namespace timeopt::cli {
 namespace {
 
+// The most rows `plan --output` writes (about 150 MB of CSV).
+constexpr double kMaxPlanSamples = 1e6;
+
 // The README's main job: across the shipped 20 x 20 m forest (maps/README.md), corner to corner.
 constexpr const char* kDefaultMap = "maps/forest_20x20.bt";
 constexpr const char* kDefaultStart = "1,1,1.5";
@@ -202,8 +205,12 @@ int RunPlan(PlanArgs args) {
     }
     if (!args.output.empty()) {
       EnsureParentDirectory(args.output);
-      WriteTextFile(args.output, SamplesToCsv(trajectory.Sample(kDefaultSampleRateHz)));
+      // 100 Hz, or fewer where that would pass kMaxPlanSamples rows (a flight of 2e7 s at limits
+      // of 1e-6 asked for 2e9): the rows carry their times, and output_rate_hz says which.
+      const double rate = std::min(kDefaultSampleRateHz, kMaxPlanSamples / std::max(trajectory.duration(), 1e-300));
+      WriteTextFile(args.output, SamplesToCsv(trajectory.Sample(rate)));
       summary["output"] = args.output;
+      summary["output_rate_hz"] = rate;
     }
     if (!args.plot.empty()) {
       EnsureParentDirectory(args.plot);

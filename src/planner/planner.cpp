@@ -21,12 +21,18 @@ using Clock = std::chrono::steady_clock;
 constexpr double kSamePoint = 1e-6;
 
 // PlanResult's min_interior_speed and min_curvature_radius (see planner.h): on a 10 ms grid more
-// than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature).
+// than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature). At
+// most kQualitySamples points: a flight of 2e7 s (limits of 1e-6) took 2e9 of them, a hang.
+constexpr double kQualitySamples = 1e6;
 void CurveQuality(PlanResult* result) {
   const Trajectory trajectory(result->curve, result->temporal.profile);
   const double T = trajectory.duration();
   double slowest = std::numeric_limits<double>::infinity(), radius = std::numeric_limits<double>::infinity();
-  for (double t = 1.0; t <= T - 1.0; t += 0.01) {
+  const double span = T - 2.0;
+  const double step = std::max(0.01, span / kQualitySamples);
+  const long count = span >= 0.0 ? static_cast<long>(std::floor(span / step)) : -1;
+  for (long n = 0; n <= count; ++n) {
+    const double t = 1.0 + n * step;
     const TrajectoryState state = trajectory.Evaluate(t);
     const double speed = state.velocity.norm();
     slowest = std::min(slowest, speed);

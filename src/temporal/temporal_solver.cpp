@@ -381,10 +381,12 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
     result.solve_time_seconds = exact.solve_time_seconds;
     result.iterations = exact.iterations;
   }
-  // Rows that make no chain along the path (a jerk limit, lambda_a): the nearest start state is
-  // found by bisection (RelaxStartState); a jerk-limited numerical failure too.
+  // Rows that make no chain along the path (a jerk limit, lambda_a, the quadrotor's cones): the
+  // nearest start state is found by bisection (RelaxStartState); a jerk-limited numerical failure
+  // too. (With cones relax_boundary was silently ignored: the chain's reachability cannot run.)
   const bool scale_start = problem.relax_boundary &&
-                           (problem.limits.max_jerk || problem.limits.max_acceleration_change) &&
+                           (problem.limits.max_jerk || problem.limits.max_acceleration_change ||
+                            problem.limits.HasNormLimits()) &&
                            (problem.boundary.start_velocity.squaredNorm() > 0.0 ||
                             problem.boundary.start_acceleration.squaredNorm() > 0.0);
   if (scale_start && problem.limits.max_jerk && result.status == TemporalStatus::kNumericalError) {

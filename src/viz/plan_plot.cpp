@@ -34,7 +34,11 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
   if (!std::isnan(options.speed_scale) && !(options.speed_scale > 0.0 && std::isfinite(options.speed_scale))) {
     throw std::invalid_argument("speed_scale must be a positive number (or NaN: the trajectory's top speed)");
   }
-  const std::vector<TrajectoryState> samples = trajectory.Sample(options.sample_rate_hz);
+  // At most kMaxPlotSamples points, whatever the flight's length (a flight of 2e7 s at 100 Hz
+  // asked for 2e9).
+  constexpr double kMaxPlotSamples = 1e5;
+  const std::vector<TrajectoryState> samples =
+      trajectory.Sample(std::min(options.sample_rate_hz, kMaxPlotSamples / std::max(trajectory.duration(), 1e-300)));
   double height = options.slice_height;
   if (std::isnan(height)) {
     height = 0.0;

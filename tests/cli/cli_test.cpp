@@ -170,6 +170,23 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   EXPECT_THAT(r.output, HasSubstr("start and goal are the same point"));
 }
 
+TEST_F(CliTest, AVerySlowPlanEndsWithinItsSampleCaps) {
+  // Limits of 1e-6 make the default plan last about 2.2e7 s: the plan's quality scan (10 ms steps)
+  // and its picture (100 Hz) asked for 2e9 samples and never ended. Now the CSV is thinned to at
+  // most 1e6 rows (the rate in output_rate_hz), and the flight check, above its 1e8 steps, says so.
+  const CliRun r = RunCli("plan --max-velocity 1e-6 --max-acceleration 1e-6 --max-jerk 1e-6 -o " + Path("slow.csv") +
+                          " --plot " + Path("slow.png"), "2>" + Path("err.txt"));
+  ASSERT_EQ(r.exit_code, 0) << ReadTextFile(Path("err.txt"));
+  const nlohmann::json summary = nlohmann::json::parse(r.output);
+  const double T = summary["total_time"].get<double>();
+  EXPECT_GT(T, 1e7);
+  const double rate = summary["output_rate_hz"].get<double>();
+  EXPECT_NEAR(rate * T, 1e6, 1.0);
+  EXPECT_THAT(summary["flight"]["error"].get<std::string>(), HasSubstr("1e8 steps"));
+  const std::string csv = ReadTextFile(Path("slow.csv"));
+  EXPECT_LE(std::count(csv.begin(), csv.end(), '\n'), 1000002);
+}
+
 TEST_F(CliTest, AnObstacleFreeMapIsPlannedInsideItsBox) {
   // A 10 x 10 x 3 m map without a tree: the distance field's box faces bound it, so the plan
   // succeeds, with a margin far larger than the map clipped to it, and keeps the robot radius

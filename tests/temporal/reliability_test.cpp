@@ -140,6 +140,26 @@ TEST(Reliability, JerkLimitedInfeasibilityNamesItsCause) {
   }
 }
 
+TEST(Reliability, RelaxBoundaryWorksWithTheQuadrotorsCones) {
+  // 4 m/s into a 1 m line under an acceleration norm of 3 m/s^2 (no per-axis limits): the fastest
+  // start that can stop is sqrt(2 a L) = 2.449 m/s. relax_boundary was silently ignored with the
+  // quadrotor's limits; now the bisection finds the start within its 0.01 of the scale (0.04 m/s).
+  TemporalProblem p;
+  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
+  p.limits.max_velocity.setConstant(kNone);
+  p.limits.max_acceleration.setConstant(kNone);
+  p.limits.max_speed = 5.0;
+  p.limits.max_acceleration_norm = 3.0;
+  p.boundary.start_velocity = Eigen::Vector3d(4, 0, 0);
+  p.cells_per_piece = 30;
+  p.relax_boundary = true;
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kOptimal) << r.message;
+  ASSERT_TRUE(r.boundary_relaxation);
+  EXPECT_LE(r.boundary_relaxation->start_speed, std::sqrt(6.0) + 1e-9);
+  EXPECT_GE(r.boundary_relaxation->start_speed, std::sqrt(6.0) - 0.04);
+}
+
 TEST(Reliability, IpoptNamesTheRowsItFailedOn) {
   // Braking from 4 m/s within 1 m under an acceleration norm of 3 (no jerk limit): infeasible on
   // the linear rows and the quadrotor's convex cones; nothing about jerk rows.
