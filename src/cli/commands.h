@@ -53,6 +53,15 @@ inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
       ->capture_default_str();
 }
 
+inline void AddSolveMemoryOption(CLI::App* sub, int64_t* mebibytes) {
+  sub->add_option("--max-memory", *mebibytes,
+                  "Memory budget of the solve, MiB: a problem whose estimated peak (cells x a measured figure per "
+                  "cell, docs/sizes-and-errors.md) is above it is refused before solving; default: half of this "
+                  "machine's memory")
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
+      ->capture_default_str();
+}
+
 // The default quadrotor for the summaries' flights, with the verdict's slack for `limits`.
 inline QuadrotorSim SummaryQuadrotor(const VehicleLimits& limits) {
   QuadrotorSimOptions options;

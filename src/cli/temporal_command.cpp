@@ -47,7 +47,30 @@ struct TemporalArgs {
   std::string plot;
   std::string export_cbf;
   bool relax_boundary = false;  // also "relax_boundary": true in the problem
+  int64_t max_memory_mib = DefaultMemoryBudgetMiB();
 };
+
+// The solver `name` under a memory budget (MiB): a problem whose TemporalPeakBytes is above it is
+// invalid input before anything is solved, and the SOCP backend's Ipopt fallback keeps to it.
+std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, const std::string& name,
+                                               int64_t max_memory_mib) {
+  const TemporalBackend backend = ParseBackend(name);
+  const int64_t budget = max_memory_mib * 1024 * 1024;
+  const int64_t peak = TemporalPeakBytes(problem, backend);
+  if (peak > budget) {
+    std::ostringstream m;
+    m << "the problem's " << problem.curve.num_pieces() << " x " << problem.cells_per_piece << " cells need about "
+      << (peak >> 20) << " MiB with " << name << (problem.limits.max_jerk ? " and a jerk limit" : "")
+      << ", above the memory budget of " << max_memory_mib << " MiB (fewer cells, or a larger --max-memory)";
+    throw std::invalid_argument(m.str());
+  }
+  if (backend == TemporalBackend::kSocp) {
+    SocpTemporalOptions options;
+    options.max_memory_bytes = budget;
+    return MakeSocpTemporalSolver(options);
+  }
+  return MakeTemporalSolver(backend);
+}
 
 // Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
 // decided the problem there is no program to write, or when the file cannot be written: a warning,
@@ -72,8 +95,8 @@ void ExportSocp(const TemporalProblem& problem, const std::string& path) {
 // Solves, writes the requested outputs and returns the exit code.
 int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
                   const std::string& output, const std::string& samples, double rate,
-                  const std::string& plot) {
-  const auto solver = MakeTemporalSolver(ParseBackend(solver_name));
+                  const std::string& plot, int64_t max_memory_mib) {
+  const auto solver = BudgetedSolver(problem, solver_name, max_memory_mib);
   const TemporalResult result = solver->Solve(problem);
   // Refuse an over-long sample request before writing the result (not after printing it).
   if (result.is_success() && !samples.empty()) Trajectory(problem.curve, result.profile).CheckSampleRate(rate);
@@ -93,7 +116,8 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 int RunTemporal(const TemporalArgs& args) {
   TemporalProblem problem = ReadTemporalProblemJson(args.problem);
   if (args.relax_boundary) problem.relax_boundary = true;
-  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot);
+  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot,
+                                      args.max_memory_mib);
   if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
   return exit_code;
 }
@@ -140,6 +164,7 @@ struct WaypointsArgs {
   std::string out_dir = "results";
   double rate = kDefaultSampleRateHz;
   bool verbose = false, quiet = false, json = false;
+  int64_t max_memory_mib = DefaultMemoryBudgetMiB();
 };
 
 std::string FormatNumber(double value) {
@@ -176,7 +201,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   if (args.verbose) {
     std::cerr << "timeopt waypoints: curve: " << args.kind << ", " << problem.curve.num_pieces() << " pieces\n";
   }
-  const auto solver = MakeTemporalSolver(ParseBackend(args.solver));
+  const auto solver = BudgetedSolver(problem, args.solver, args.max_memory_mib);
   const TemporalResult result = solver->Solve(problem);
   if (args.verbose) {
     std::cerr << "timeopt waypoints: temporal: " << std::fixed << std::setprecision(1)
@@ -259,6 +284,7 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
+  AddSolveMemoryOption(sub, &args->max_memory_mib);
   sub->add_flag("--relax-boundary", args->relax_boundary,
                "If the boundary speeds cannot be flown, answer with the closest ones that can (the result's "
                "boundary_relaxation) instead of infeasible");
@@ -303,6 +329,7 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
+  AddSolveMemoryOption(sub, &args->max_memory_mib);
   sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr (curve, temporal, flight)");
   sub->add_flag("-q,--quiet", args->quiet, "Print nothing on stdout (the files are still written)");
   sub->add_flag("--json", args->json, "Print result.json (the result and its flight block) instead of the summary");

@@ -194,6 +194,7 @@ class SocpTemporalSolver final : public TemporalSolver {
 
  protected:
   double jerk_ipopt_fallback_seconds() const override { return options_.jerk_ipopt_fallback_seconds; }
+  std::int64_t jerk_ipopt_fallback_memory() const override { return options_.max_memory_bytes; }
   int structured_jerk_iterations() const override {
     return options_.structured ? std::min(internal::BandedIpmSettings().max_iterations, options_.max_iterations) : 0;
   }

@@ -193,6 +193,10 @@ bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations
 
 bool SocpTemporalOptions::IsValid(std::string* error) const {
   if (!ValidSolverOptions(tolerance, max_iterations, 1, error)) return false;
+  if (!(max_memory_bytes >= 0)) {
+    if (error) *error = "max_memory_bytes: expected a number >= 0, got " + std::to_string(max_memory_bytes);
+    return false;
+  }
   if (!(jerk_ipopt_fallback_seconds >= 0.0)) {
     if (error) {
       *error = "jerk_ipopt_fallback_seconds: expected a number >= 0, got " + std::to_string(jerk_ipopt_fallback_seconds);
@@ -209,6 +213,17 @@ bool IpoptTemporalOptions::IsValid(std::string* error) const {
     return false;
   }
   return true;
+}
+
+std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend backend) {
+  constexpr double kProcess = 64.0 * (1 << 20);
+  const bool jerk = problem.limits.max_jerk.has_value();
+  double per_cell = 0.0;
+  if (backend == TemporalBackend::kSocp) per_cell = jerk ? 16e3 : 10e3;
+  else per_cell = jerk ? 1e6 : 5e3;
+  const double cells = static_cast<double>(problem.curve.num_pieces()) * std::max(problem.cells_per_piece, 0);
+  const double bytes = kProcess + cells * per_cell;
+  return bytes < 9e18 ? static_cast<std::int64_t>(bytes) : std::numeric_limits<std::int64_t>::max();
 }
 
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
@@ -360,7 +375,15 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
                      "), but a rest-to-rest problem whose limits allow hovering always has one (the "
                      "same path, slowly enough): a numerical failure";
   }
-  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ &&
+  const bool fallback_fits = jerk_ipopt_fallback_memory() <= 0 ||
+                            TemporalPeakBytes(problem, TemporalBackend::kIpopt) <= jerk_ipopt_fallback_memory();
+  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ && !fallback_fits &&
+      (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
+    result.message += "; the Ipopt fallback was skipped: its exact rows would need about " +
+                      std::to_string(TemporalPeakBytes(problem, TemporalBackend::kIpopt) >> 20) +
+                      " MiB, above the memory budget of " + std::to_string(jerk_ipopt_fallback_memory() >> 20) + " MiB";
+  }
+  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ && fallback_fits &&
       (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
     // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.
     IpoptTemporalOptions fallback;

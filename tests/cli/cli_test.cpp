@@ -164,6 +164,10 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   EXPECT_EQ(r.output, "");
   EXPECT_THAT(ReadTextFile(Path("err.txt")), HasSubstr("more than 1e8 samples"));
   EXPECT_FALSE(std::filesystem::exists(Path("s.csv")));
+  // A memory budget below the solve's estimated peak (64 MiB for the process alone): refused first.
+  r = RunCli("temporal " + line + " --max-memory 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("above the memory budget of 1 MiB"));
   // The same plan with start == goal: a message that says so, not the temporal stage's "zero length".
   r = RunCli("plan --start 1,1,1.5 --goal 1,1,1.5 -q");
   EXPECT_EQ(r.exit_code, 2);

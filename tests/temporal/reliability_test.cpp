@@ -116,6 +116,25 @@ TEST(Reliability, ABrakingStartThatCanBeFlownIsSolved) {
   EXPECT_THAT(r.message, HasSubstr("it needs at least 0.2 m/s"));
 }
 
+TEST(Reliability, TheIpoptFallbackKeepsToTheMemoryBudget) {
+  // A marginal braking start (0.21 m/s at 2 m/s^2, j = 10: the speed falls to 0.01 m/s) ends the
+  // sequential convex programme in a numerical error; under a budget below TemporalPeakBytes of
+  // Ipopt's exact rows (1 MB per cell: 64 MiB + 50 MB here) the fallback is skipped, saying so,
+  // where it took its 20 s.
+  TemporalProblem p = Line(4.0, 3.0, 10.0, 50, ConstraintMode::kCertified);
+  p.boundary.start_velocity = Eigen::Vector3d(0.21, 0, 0);
+  p.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
+  EXPECT_EQ(TemporalPeakBytes(p, TemporalBackend::kIpopt), (64 << 20) + 50 * 1000000);
+  EXPECT_EQ(TemporalPeakBytes(p, TemporalBackend::kSocp), (64 << 20) + 50 * 16000);
+  SocpTemporalOptions options;
+  options.max_memory_bytes = 100 << 20;
+  const TemporalResult r = MakeSocpTemporalSolver(options)->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kNumericalError) << r.message;
+  EXPECT_THAT(r.message, HasSubstr("the Ipopt fallback was skipped"));
+  options.max_memory_bytes = -1;
+  EXPECT_THROW(MakeSocpTemporalSolver(options), std::invalid_argument);
+}
+
 TEST(Reliability, JerkLimitedInfeasibilityNamesItsCause) {
   // The same causes as without a jerk limit (which only makes a problem harder): a start above the
   // velocity limit, a start too fast to stop in 1 m (v 4, a 3: at most sqrt(2 a L) = 2.45 m/s

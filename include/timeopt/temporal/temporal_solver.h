@@ -5,6 +5,7 @@
 // problem, so they agree up to their tolerances. Their statuses and results are in
 // temporal_result.h; the SOCP itself, for other conic solvers, in temporal_socp.h.
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,6 +53,8 @@ class TemporalSolver {
   // CPU seconds for retrying a failed jerk-limited solve with the Ipopt backend's exact rows (0:
   // no retry).
   virtual double jerk_ipopt_fallback_seconds() const { return 0.0; }
+  // The memory budget of that retry, bytes (0: none; SocpTemporalOptions::max_memory_bytes).
+  virtual std::int64_t jerk_ipopt_fallback_memory() const { return 0; }
   // The iteration limit of each interior-point solve of the structured sequential convex programme
   // (banded solves over the control values), which a jerk-limited problem goes to first; 0: none
   // (the general path only). The SOCP backend with `structured`.
@@ -101,9 +104,13 @@ struct SocpTemporalOptions {
   // time (a single 300 m quintic at vmax 2: T ~ 117 s against ramps of 0.2 s); Ipopt solves those
   // in 0.4-0.9 s. 20 s ends a problem neither can solve with a status.
   double jerk_ipopt_fallback_seconds = 20.0;
+  // A memory budget, bytes (0: none): the Ipopt fallback above is skipped, saying so in the
+  // message, where TemporalPeakBytes puts Ipopt's exact rows above it (they take about 1 MB per
+  // cell; a jerk-limited line at K = 20,000 reached 3.2 GB in the fallback).
+  std::int64_t max_memory_bytes = 0;
 
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
-  // and finite, max_iterations >= 1 and jerk_ipopt_fallback_seconds >= 0.
+  // and finite, max_iterations >= 1, jerk_ipopt_fallback_seconds >= 0 and max_memory_bytes >= 0.
   bool IsValid(std::string* error) const;
 };
 
@@ -124,6 +131,15 @@ struct IpoptTemporalOptions {
   // and finite and max_iterations >= 0.
   bool IsValid(std::string* error) const;
 };
+
+// An upper estimate of the peak memory (bytes) of solving `problem` with `backend`, from its cells
+// (pieces x K) and measured figures per cell: peaks of one process's solve over single pieces and
+// 20-piece chains (2026-12-03), rounded up. Paper and certified rows: 10 KB per cell with the SOCP
+// backend (measured 1.5-8.8 KB; 882 MB at K = 100,000 on one piece), 5 KB with Ipopt (4.4 KB);
+// jerk-limited: 16 KB with the SOCP backend's sequential convex programme (11-14 KB), 1 MB with
+// Ipopt's exact rows (0.5-0.9 MB at K = 500-2,000); plus 64 MiB for the process. A caller with a
+// budget (the CLI's --max-memory) refuses a problem above it before solving.
+std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend backend);
 
 // The factories throw std::invalid_argument with IsValid's message for invalid options.
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options = {});
