@@ -19,6 +19,9 @@ using Clock = std::chrono::steady_clock;
 
 // Metres: a goal this close to the start is the start.
 constexpr double kSamePoint = 1e-6;
+// The most pieces a plan's curve may have (its spatial and temporal stages grow with them; the
+// default plan has 22).
+constexpr double kMaxPlanPieces = 1e4;
 
 // PlanResult's min_interior_speed and min_curvature_radius (see planner.h): on a 10 ms grid more
 // than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature). At
@@ -331,6 +334,22 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
       options.robot_radius,
       std::min({options.robot_radius + half_step, VoxelClearance(*esdf_, start, exact_below),
                 VoxelClearance(*esdf_, goal, exact_below)}));
+  {
+    // The pieces of the last attempt (the shortest segments), counted before any is made: a
+    // max_segment_length of 1e-9 m asked for 3e10 of them (3.2 GB before the allocation failed).
+    const double shortest = options.max_segment_length / std::pow(2.0, options.max_attempts - 1);
+    double pieces = 0.0;
+    for (Eigen::Index i = 0; i + 1 < path.waypoints.cols(); ++i) {
+      pieces += std::max(1.0, std::ceil((path.waypoints.col(i + 1) - path.waypoints.col(i)).norm() / shortest));
+    }
+    if (!(pieces <= kMaxPlanPieces)) {
+      std::ostringstream message;
+      message << "options.max_segment_length: " << options.max_segment_length << " m splits the path into about "
+              << pieces << " pieces by the last of " << options.max_attempts << " attempts, above the cap of "
+              << kMaxPlanPieces << " (a longer max_segment_length)";
+      return finish(PlanStatus::kInvalidInput, message.str());
+    }
+  }
   bool safe = false;
   for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
     const double factor = std::pow(options.retry_collision_weight_factor, attempt);

@@ -219,6 +219,16 @@ TEST(Planner, MapsSearchStatusesAndValidatesNestedOptions) {
   ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, nested));
   EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
   EXPECT_NE(r2.message.find("max_acceleration_change"), std::string::npos) << r2.message;
+  // Sizes that would drive memory are refused before anything is made: 3 m at segments of 1e-9 m
+  // (1e-9 / 8 by the last attempt) is about 2.4e10 pieces, above the cap of 1e4; start == goal.
+  nested = PlannerOptions();
+  nested.max_segment_length = 1e-9;
+  r2 = planner.Plan(start, free_goal, nested);
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("max_segment_length"), std::string::npos) << r2.message;
+  r2 = planner.Plan(start, start, PlannerOptions());
+  EXPECT_EQ(r2.status, PlanStatus::kInvalidInput);
+  EXPECT_NE(r2.message.find("start and goal are the same point"), std::string::npos) << r2.message;
   // The same planner then plans with valid options (its solver is remade for them).
   ASSERT_NO_THROW(r2 = planner.Plan(start, free_goal, PlannerOptions()));
   EXPECT_TRUE(r2.is_success()) << r2.message;
