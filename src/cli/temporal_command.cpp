@@ -48,12 +48,13 @@ struct TemporalArgs {
   std::string export_cbf;
   bool relax_boundary = false;  // also "relax_boundary": true in the problem
   int64_t max_memory_mib = DefaultMemoryBudgetMiB();
+  std::optional<double> ipopt_seconds;
 };
 
 // The solver `name` under a memory budget (MiB): a problem whose TemporalPeakBytes is above it is
 // invalid input before anything is solved, and the SOCP backend's Ipopt fallback keeps to it.
 std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, const std::string& name,
-                                               int64_t max_memory_mib) {
+                                               int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
   const TemporalBackend backend = ParseBackend(name);
   const int64_t budget = max_memory_mib * 1024 * 1024;
   const int64_t peak = TemporalPeakBytes(problem, backend);
@@ -67,9 +68,19 @@ std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, c
   if (backend == TemporalBackend::kSocp) {
     SocpTemporalOptions options;
     options.max_memory_bytes = budget;
+    if (ipopt_seconds) options.jerk_ipopt_fallback_seconds = *ipopt_seconds;
     return MakeSocpTemporalSolver(options);
   }
-  return MakeTemporalSolver(backend);
+  IpoptTemporalOptions options;
+  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
+  return MakeIpoptTemporalSolver(options);
+}
+
+void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds) {
+  sub->add_option("--ipopt-seconds", *seconds,
+                  "CPU seconds for an Ipopt solve: --solver ipopt (default 300), or the socp solver's fallback to "
+                  "Ipopt's exact jerk rows (default 20; 0: none)")
+      ->check(CLI::NonNegativeNumber);
 }
 
 // Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
@@ -95,8 +106,8 @@ void ExportSocp(const TemporalProblem& problem, const std::string& path) {
 // Solves, writes the requested outputs and returns the exit code.
 int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
                   const std::string& output, const std::string& samples, double rate,
-                  const std::string& plot, int64_t max_memory_mib) {
-  const auto solver = BudgetedSolver(problem, solver_name, max_memory_mib);
+                  const std::string& plot, int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
+  const auto solver = BudgetedSolver(problem, solver_name, max_memory_mib, ipopt_seconds);
   const TemporalResult result = solver->Solve(problem);
   // Refuse an over-long sample request before writing the result (not after printing it).
   if (result.is_success() && !samples.empty()) Trajectory(problem.curve, result.profile).CheckSampleRate(rate);
@@ -117,7 +128,7 @@ int RunTemporal(const TemporalArgs& args) {
   TemporalProblem problem = ReadTemporalProblemJson(args.problem);
   if (args.relax_boundary) problem.relax_boundary = true;
   const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot,
-                                      args.max_memory_mib);
+                                      args.max_memory_mib, args.ipopt_seconds);
   if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
   return exit_code;
 }
@@ -165,6 +176,7 @@ struct WaypointsArgs {
   double rate = kDefaultSampleRateHz;
   bool verbose = false, quiet = false, json = false;
   int64_t max_memory_mib = DefaultMemoryBudgetMiB();
+  std::optional<double> ipopt_seconds;
 };
 
 std::string FormatNumber(double value) {
@@ -201,7 +213,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   if (args.verbose) {
     std::cerr << "timeopt waypoints: curve: " << args.kind << ", " << problem.curve.num_pieces() << " pieces\n";
   }
-  const auto solver = BudgetedSolver(problem, args.solver, args.max_memory_mib);
+  const auto solver = BudgetedSolver(problem, args.solver, args.max_memory_mib, args.ipopt_seconds);
   const TemporalResult result = solver->Solve(problem);
   if (args.verbose) {
     std::cerr << "timeopt waypoints: temporal: " << std::fixed << std::setprecision(1)
@@ -285,6 +297,7 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
   AddSolveMemoryOption(sub, &args->max_memory_mib);
+  AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("--relax-boundary", args->relax_boundary,
                "If the boundary speeds cannot be flown, answer with the closest ones that can (the result's "
                "boundary_relaxation) instead of infeasible");
@@ -330,6 +343,7 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
   AddSolveMemoryOption(sub, &args->max_memory_mib);
+  AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr (curve, temporal, flight)");
   sub->add_flag("-q,--quiet", args->quiet, "Print nothing on stdout (the files are still written)");
   sub->add_flag("--json", args->json, "Print result.json (the result and its flight block) instead of the summary");

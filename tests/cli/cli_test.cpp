@@ -168,6 +168,12 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   r = RunCli("temporal " + line + " --max-memory 1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("above the memory budget of 1 MiB"));
+  // --ipopt-seconds: Ipopt's CPU cap; 0 turns the socp solver's fallback off, and is no cap for Ipopt.
+  r = RunCli("temporal " + line + " --ipopt-seconds 0");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunCli("temporal " + line + " --solver ipopt --ipopt-seconds 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("max_solve_time_in_seconds"));
   // And for a conic problem: min x s.t. x >= 1 needs 64 MiB for the process alone.
   Write("tiny.cbf", "VER\n3\nOBJSENSE\nMIN\nVAR\n1 1\nF 1\nCON\n1 1\nL+ 1\nOBJACOORD\n1\n0 1\nACOORD\n1\n0 0 1\nBCOORD\n1\n0 -1\n");
   r = RunCli("conic " + Path("tiny.cbf") + " --max-memory 1");
