@@ -322,17 +322,19 @@ Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& reg
   // margin) is the map, not a box beyond the OctoMap key range.
   const Eigen::AlignedBox3d known_metric = known.Metric(map.resolution());
   const Eigen::AlignedBox3d clipped = region.intersection(known_metric);
-  const VoxelBox wanted = VoxelBox::Covering(clipped.isEmpty() ? region : clipped, map.resolution());
+  const auto no_overlap = [&] {
+    std::ostringstream message;
+    message << "the region [" << region.min().transpose() << "] - [" << region.max().transpose()
+            << "] m does not overlap the map's known box " << "[" << known_metric.min().transpose() << "] - ["
+            << known_metric.max().transpose() << "] m";
+    return std::invalid_argument(message.str());
+  };
+  if (clipped.isEmpty()) throw no_overlap();
+  const VoxelBox wanted = VoxelBox::Covering(clipped, map.resolution());
   VoxelBox box;
   box.min = wanted.min.cwiseMax(known.min);
   box.size = wanted.end().cwiseMin(known.end()) - box.min;
-  if ((box.size.array() <= 0).any()) {
-    std::ostringstream message;
-    message << "the region [" << region.min().transpose() << "] - [" << region.max().transpose()
-            << "] m does not overlap the map's known box " << "[" << known.Metric(map.resolution()).min().transpose()
-            << "] - [" << known.Metric(map.resolution()).max().transpose() << "] m";
-    throw std::invalid_argument(message.str());
-  }
+  if ((box.size.array() <= 0).any()) throw no_overlap();
   CheckBudget(box, max_bytes);
   OccupancyGrid grid = map.Rasterize(box);
   // The cut faces: a face of the region strictly inside the known box.

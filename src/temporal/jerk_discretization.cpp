@@ -88,9 +88,11 @@ constexpr double kCurvedRestShare = 0.95;
 // +0.94%). Cells growing by 1.25 in length (edges whose ratio falls from 2.25 towards 1.25), as
 // before, left +0.81% and 8.
 constexpr double kRestGrading = 1.25;
-// The first cell of a braking start (BrakeCellSize), as a share of the longest that can brake, and
-// its smallest size relative to the nominal cell (a smaller one would not brake either; the grading
-// after it is capped at K / 3 cells).
+// The first cell of a braking start (BrakeCellSize): at most kBrakeCellShare of the longest cell
+// that can brake and kBrakePhaseShare of the braking phase, at least kSmallestBrakeCell of the
+// nominal cell (the grading after it is capped at K / 3 cells). Against the time-domain reference
+// from 0.5 m/s at -2 m/s^2 (j = 10, a 10 m line): a phase share of 1/4, 1/6, 1/8 and 1/16 left
+// +0.63 / +0.55 / +0.53 / +1.86% at K = 50; 1/32 had no answer there.
 constexpr double kBrakeCellShare = 0.5;
 constexpr double kBrakePhaseShare = 1.0 / 8.0;
 constexpr double kSmallestBrakeCell = 1e-3;
@@ -805,7 +807,7 @@ bool StraightPiece(const PolynomialPiece& piece) {
   return true;
 }
 
-// The boundary acceleration at the start (end = false) or end of the path.// The boundary acceleration at the start (end = false) or end of the path.
+// The boundary acceleration at the start (end = false) or end of the path.
 void AddBoundaryAcceleration(JerkContext& c, bool end) {
   const TemporalProblem& p = c.problem;
   const int m = p.curve.num_pieces();
@@ -843,8 +845,8 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
       // (u the unit tangent). A start braking at |a| (or an end reached while speeding up, in
       // reverse) gets its acceleration back to 0 no sooner than |a| / j_t, and meanwhile slows by at
       // least a^2 / (2 j_t): below that speed the vehicle would have to reverse.
+      const double a_path = (end ? 1.0 : -1.0) * acc.dot(unit);  // > 0: braking away from the end
       const double speed = f1.norm();
-      const double a_path = (end ? 1.0 : -1.0) * a * speed;  // > 0: braking away from the end
       double j = std::numeric_limits<double>::infinity();
       for (int axis = 0; axis < 3; ++axis) {
         if (std::abs(unit(axis)) > 1e-12) j = std::min(j, (*p.limits.max_jerk)(axis) / std::abs(unit(axis)));
@@ -1007,8 +1009,9 @@ RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_t
 // b >= 0) non-negative only while h <= b0 / |sddot|. A longer cell cannot brake at all: a start at
 // 0.5 m/s braking at 2 m/s^2 with a jerk limit of 10 (flyable: it slows to 0.3 m/s) was called
 // infeasible at K = 50 on a 10 m line (cells of 0.2 m against 0.125 m). So that cell is
-// kBrakeCellShare of the bound, and the cells after it grow as after a halved rest cell. None
-// (cell 0) where the end does not brake or the bound is a nominal cell or more.
+// kBrakeCellShare of the bound (and a share of the braking phase, below), and the cells after it
+// grow as after a halved rest cell. None (cell 0) where the end does not brake, where that cell
+// would be a nominal one or more, or where a nominal cell can brake and the grading is dear (below).
 RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
   RestSize r;
   const Eigen::Vector3d v = end ? p.boundary.end_velocity : p.boundary.start_velocity;
@@ -1028,10 +1031,11 @@ RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
   for (int axis = 0; axis < 3; ++axis) {
     if (std::abs(f1(axis)) > 1e-12 * speed) j = std::min(j, (*p.limits.max_jerk)(axis) * speed / std::abs(f1(axis)));
   }
-  const double a_path = slope_against * speed, v_path = std::sqrt(b) * speed;  // m/s^2, m/s
+  // The braking along the path, m/s^2 (the acceleration's tangential part), and the speed, m/s.
+  const double a_path = (end ? 1.0 : -1.0) * acc.dot(f1) / speed, v_path = std::sqrt(b) * speed;
   const double must = kBrakeCellShare * b / slope_against;
   double h = must;
-  if (std::isfinite(j) && j > 0.0) {
+  if (std::isfinite(j) && j > 0.0 && a_path > 0.0) {
     const double t = a_path / j;
     const double phase = std::max(0.0, v_path * t - 0.5 * a_path * t * t + j * t * t * t / 6.0) / speed;
     h = std::min(h, kBrakePhaseShare * phase);

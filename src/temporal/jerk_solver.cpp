@@ -308,13 +308,13 @@ void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d,
     const double at = end ? 1.0 : 0.0;
     const Eigen::Vector3d v = end ? p.boundary.end_velocity : p.boundary.start_velocity;
     const Eigen::Vector3d acc = end ? p.boundary.end_acceleration : p.boundary.start_acceleration;
-    const Eigen::Vector3d f1 = p.curve.Evaluate(piece, at, 1), f2 = p.curve.Evaluate(piece, at, 2);
+    const Eigen::Vector3d f1 = p.curve.Evaluate(piece, at, 1);
     const double speed = f1.norm();
     if (!(speed > p.zero_tangent_tolerance) || !(v.squaredNorm() > 0.0)) continue;
     const Eigen::Vector3d unit = f1 / speed;
     const double v0 = v.norm();
     // The acceleration along the path, away from the end (time runs backwards from an end).
-    const double a0 = (end ? -1.0 : 1.0) * (acc - f2 * (v.squaredNorm() / (speed * speed))).dot(unit);
+    const double a0 = (end ? -1.0 : 1.0) * acc.dot(unit);
     if (!(a0 < 0.0)) continue;
     double j = std::numeric_limits<double>::infinity();
     for (int axis = 0; axis < 3; ++axis) {
