@@ -373,9 +373,11 @@ TEST(JerkLimited, TheAnswerDoesNotDependOnUnitsOrOnLimitsThatCannotBind) {
 // The linearized jerk rows are an inner approximation: their having no solution at the jerk-free
 // answer is not a certificate. The property sweep found such a problem (its problem 5972: a
 // polyline of 4 pieces started at 0.4 m/s, K = 6) that the SOCP backend called infeasible while
-// Ipopt's exact rows solve it, and the answer holds every limit. Now it is a numerical failure
-// that says so, and the Ipopt fallback answers with Ipopt's own T (the same solver on the same
-// rows: 1e-12).
+// Ipopt's exact rows solve it. Since the jerk-free guess caps accelerations the jerk limit cannot
+// reach, the structured path answers it, within 1e-6 of Ipopt's T (measured 6e-8; the SCP stops
+// at scp_tolerance 1e-4 of T's change, and Ipopt's exact rows on the same cells are the truth).
+// A marginal braking start (0.21 m/s at -2 m/s^2, j = 10: the speed falls to 0.01 m/s) still has
+// no solution at its first linearization: a numerical failure that says so, not "infeasible".
 TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
   const TemporalProblem p = ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) +
                                                     "/tests/temporal/data/jerk_linearization_infeasible.json");
@@ -385,12 +387,17 @@ TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
   SocpTemporalOptions no_fallback;
   no_fallback.jerk_ipopt_fallback_seconds = 0.0;
   const TemporalResult conic = MakeSocpTemporalSolver(no_fallback)->Solve(p);
-  EXPECT_EQ(conic.status, TemporalStatus::kNumericalError) << conic.message;
-  EXPECT_THAT(conic.message, HasSubstr("does not prove the problem infeasible"));
-  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
-  ASSERT_TRUE(socp.is_success()) << socp.message;
-  EXPECT_EQ(socp.solver, "ipopt");
-  EXPECT_NEAR(socp.total_time, exact.total_time, 1e-12 * exact.total_time);
+  ASSERT_TRUE(conic.is_success()) << conic.message;
+  EXPECT_NEAR(conic.total_time, exact.total_time, 1e-6 * exact.total_time);
+  EXPECT_LE(conic.max_jerk_ratio, 1.0 + 1e-6);
+
+  TemporalProblem marginal = JerkLine(Eigen::Vector3d(10.0, 0.0, 0.0), 4.0, 3.0, 10.0, 50);
+  marginal.constraint_mode = ConstraintMode::kCertified;
+  marginal.boundary.start_velocity = Eigen::Vector3d(0.21, 0, 0);
+  marginal.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
+  const TemporalResult r = MakeSocpTemporalSolver(no_fallback)->Solve(marginal);
+  EXPECT_EQ(r.status, TemporalStatus::kNumericalError) << r.message;
+  EXPECT_THAT(r.message, HasSubstr("does not prove the problem infeasible"));
 }
 
 // Fewer than 3 cells per piece leave a rest-to-rest line no regular cell between its rest cells:
