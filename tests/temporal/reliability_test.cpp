@@ -34,6 +34,19 @@ TemporalProblem Line(double v, double a, std::optional<double> j, int K, Constra
   return p;
 }
 
+// 4 m/s into a 1 m line with only the quadrotor's limits: speed 5 m/s, acceleration norm 3 m/s^2.
+TemporalProblem NormBrake() {
+  TemporalProblem p;
+  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
+  p.limits.max_velocity.setConstant(kNone);
+  p.limits.max_acceleration.setConstant(kNone);
+  p.limits.max_speed = 5.0;
+  p.limits.max_acceleration_norm = 3.0;
+  p.boundary.start_velocity = Eigen::Vector3d(4, 0, 0);
+  p.cells_per_piece = 30;
+  return p;
+}
+
 TEST(Reliability, LimitsThatCannotBindLeaveTheAnswerWithoutThem) {
   // A speed (or velocity) limit of 1e300 m/s squared to infinity in the rows ("G has Inf"). On a
   // 10 m line at 3 m/s^2 the answer is the bang-bang T = 2 sqrt(10 / 3) s, which the paper's and
@@ -163,14 +176,7 @@ TEST(Reliability, RelaxBoundaryWorksWithTheQuadrotorsCones) {
   // 4 m/s into a 1 m line under an acceleration norm of 3 m/s^2 (no per-axis limits): the fastest
   // start that can stop is sqrt(2 a L) = 2.449 m/s. relax_boundary was silently ignored with the
   // quadrotor's limits; now the bisection finds the start within its 0.01 of the scale (0.04 m/s).
-  TemporalProblem p;
-  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
-  p.limits.max_velocity.setConstant(kNone);
-  p.limits.max_acceleration.setConstant(kNone);
-  p.limits.max_speed = 5.0;
-  p.limits.max_acceleration_norm = 3.0;
-  p.boundary.start_velocity = Eigen::Vector3d(4, 0, 0);
-  p.cells_per_piece = 30;
+  TemporalProblem p = NormBrake();
   p.relax_boundary = true;
   const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
   ASSERT_EQ(r.status, TemporalStatus::kOptimal) << r.message;
@@ -182,14 +188,7 @@ TEST(Reliability, RelaxBoundaryWorksWithTheQuadrotorsCones) {
 TEST(Reliability, IpoptNamesTheRowsItFailedOn) {
   // Braking from 4 m/s within 1 m under an acceleration norm of 3 (no jerk limit): infeasible on
   // the linear rows and the quadrotor's convex cones; nothing about jerk rows.
-  TemporalProblem p;
-  p.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0));
-  p.limits.max_velocity.setConstant(kNone);
-  p.limits.max_acceleration.setConstant(kNone);
-  p.limits.max_speed = 5.0;
-  p.limits.max_acceleration_norm = 3.0;
-  p.boundary.start_velocity = Eigen::Vector3d(4, 0, 0);
-  p.cells_per_piece = 30;
+  const TemporalProblem p = NormBrake();
   const TemporalResult r = MakeIpoptTemporalSolver()->Solve(p);
   ASSERT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
   EXPECT_THAT(r.message, ::testing::Not(HasSubstr("jerk")));
