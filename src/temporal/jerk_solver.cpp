@@ -33,6 +33,7 @@
 #include <exception>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -102,6 +103,10 @@ constexpr double kCoarseTolerance = 1e-3;
 // The structured path's jerk-free guess is solved on cells_per_piece / kGuessCoarsening cells (m = 10,
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The general path's sequential convex programme that stops before its tolerance (a failed convex
+// solve, or max_scp_iterations) answers only if its last step changed T by at most this share.
+constexpr double kUnsettledShare = 1e-2;
 // The jerk-free guess caps per-axis accelerations at this multiple of the largest one the jerk
 // limit reaches over the path (see jerk_free_guess). On the default plan's curve at limits of 1e2
 // (1e6), the structured path's convex solves took 214 iterations in the first (1e2: the iteration
@@ -1104,7 +1109,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   }
   history.push_back(first.total_time);
 
-  bool have_best = false;
+  bool have_best = false, converged_once = false;
+  std::optional<TemporalResult> stopped;  // the failed solve that ended the programme early
   for (int n = 0; n < problem.max_scp_iterations; ++n) {
     TemporalResult next;
     std::vector<double> next_b, next_x;
@@ -1112,6 +1118,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       if (have_best) {
         best.message = "stopped at convex solve " + std::to_string(history.size() + 1) + ": " +
                        ToString(next.status) + ": " + next.message;
+        stopped = next;
         break;
       }
       if (next.status == TemporalStatus::kInfeasible) {
@@ -1134,7 +1141,30 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     }
     linearization = std::move(next_b);
     x = std::move(next_x);
-    if (converged) break;
+    if (converged) {
+      converged_once = true;
+      break;
+    }
+  }
+  if (!converged_once) {
+    // Stopped early (a convex solve failed) or out of iterations: the best profile is flyable but
+    // is an optimum only if the programme had about settled. Its last step's change of T says so:
+    // above kUnsettledShare (or with a single linearized solve, no step at all) it is not returned
+    // as optimal (a 2 m line in pieces of 1 m, 1 mm and 1 m was "optimal" at 5 x its time).
+    const size_t n = history.size();
+    const double change = n >= 3 ? std::abs(history[n - 1] - history[n - 2]) / history[n - 1] : kInf;
+    if (!(change <= kUnsettledShare)) {
+      TemporalResult failed;
+      failed.status = stopped ? TemporalStatus::kNumericalError : TemporalStatus::kIterationLimit;
+      failed.joints = best.joints;
+      std::ostringstream m;
+      m << "the sequential convex programme " << (stopped ? best.message : "ran out of iterations")
+        << " before it settled (T " << best.total_time << " s, its last change "
+        << (std::isfinite(change) ? std::to_string(100.0 * change) + "%" : std::string("unknown")) << ")";
+      failed.message = m.str();
+      return finish(failed);
+    }
+    best.reduced_accuracy = true;
   }
   return finish(best);
 }

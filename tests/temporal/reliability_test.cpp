@@ -148,6 +148,38 @@ TEST(Reliability, TheIpoptFallbackKeepsToTheMemoryBudget) {
   EXPECT_THROW(MakeSocpTemporalSolver(options), std::invalid_argument);
 }
 
+TEST(Reliability, AnUnsettledProgrammeIsNotCalledOptimal) {
+  // A 2.001 m line in pieces of 1 m, 1 mm and 1 m (joints G1 with speed ratios of 1,000): the
+  // sequential convex programme's third convex solve fails. It answered "optimal" with the best
+  // profile so far, 5 x the time of the same line as one piece. Truth: that line's S-curve
+XX
+  // answer is either within 5% of it (a grid of 50 cells per piece holds it within 1%) or not
+  // optimal, saying the programme had not settled. (Without the Ipopt fallback: it runs for 20 s.)
+  TemporalProblem p;
+  p.curve = PiecewiseCurve({test_support::LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0)),
+                            test_support::LinearPiece(Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(1.001, 0, 0)),
+                            test_support::LinearPiece(Eigen::Vector3d(1.001, 0, 0), Eigen::Vector3d(2.001, 0, 0))});
+  p.limits.max_velocity.setConstant(4.0);
+  p.limits.max_acceleration.setConstant(3.0);
+  p.limits.max_jerk = Eigen::Vector3d::Constant(10.0);
+  p.cells_per_piece = 50;
+  TemporalProblem line = p;
+  line.curve = Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(2.001, 0, 0));
+  line.cells_per_piece = 150;
+  const TemporalResult single = MakeSocpTemporalSolver()->Solve(line);
+  ASSERT_EQ(single.status, TemporalStatus::kOptimal) << single.message;
+  EXPECT_NEAR(single.total_time, 1.9619, 0.01);  // the S-curve of 2.001 m (v not reached; 2 m: 1.96032 s)
+  SocpTemporalOptions no_fallback;
+  no_fallback.jerk_ipopt_fallback_seconds = 0.0;
+  const TemporalResult r = MakeSocpTemporalSolver(no_fallback)->Solve(p);
+  if (r.status == TemporalStatus::kOptimal) {
+    EXPECT_NEAR(r.total_time / single.total_time, 1.0, 0.05);
+  } else {
+    EXPECT_EQ(r.status, TemporalStatus::kNumericalError) << r.message;
+    EXPECT_THAT(r.message, HasSubstr("before it settled"));
+  }
+}
+
 TEST(Reliability, JerkLimitedInfeasibilityNamesItsCause) {
   // The same causes as without a jerk limit (which only makes a problem harder): a start above the
   // velocity limit, a start too fast to stop in 1 m (v 4, a 3: at most sqrt(2 a L) = 2.45 m/s
