@@ -141,7 +141,7 @@ void TemporalProblem::Validate() const {
   if (static_cast<long long>(curve.num_pieces()) * cells_per_piece * (limits.max_jerk ? 2 : 1) > kMaxCells) {
     throw std::invalid_argument("discretization.K: " + std::to_string(curve.num_pieces()) + " pieces x " +
                                 std::to_string(cells_per_piece) + " cells is above the " + std::to_string(kMaxCells) +
-                                " cells this library takes (about 1 KB of memory each)");
+                                " cells this library takes (several KB of memory each)");
   }
   if (cells_per_piece > kMaxCellsPerPiece) {
     throw std::invalid_argument("discretization.K: at most " + std::to_string(kMaxCellsPerPiece) +

@@ -73,8 +73,10 @@ inline constexpr int kMinJerkLimitedCellsPerPiece = 3;
 // The largest number of cells per piece a problem may ask for: 100000 (ds = 1e-5) is far finer
 // than any use needs, and keeps a problem's memory bounded per piece (a few MB).
 inline constexpr int kMaxCellsPerPiece = 100000;
-// The most cells in all (pieces x cells per piece): memory grows ~1 KB per cell in the solvers
-// (rows, cones, the KKT system), so this caps a problem at ~2 GB (the benchmarks go to 20,000).
+// The most cells in all (pieces x cells per piece, twice that with a jerk limit): memory grows with
+// the cells (rows, cones, the KKT system; measured 1.5-8.8 KB per cell without a jerk limit, see
+// TemporalPeakBytes), so this bounds a problem's size whatever the machine; a memory budget
+// (the CLI's --max-memory) refuses less (the benchmarks go to 20,000).
 inline constexpr long long kMaxCells = 2000000;
 
 struct TemporalProblem {
