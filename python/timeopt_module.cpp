@@ -5,6 +5,7 @@
 // RuntimeError with the library's messages; statuses are enums, as in C++.
 
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -175,8 +176,30 @@ TemporalBackend BackendFrom(const std::string& name) {
   return backend;
 }
 
-TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& solver) {
-  std::unique_ptr<TemporalSolver> s = MakeTemporalSolver(BackendFrom(solver));
+// max_memory_mb > 0: a problem whose TemporalPeakBytes is above it raises ValueError before it is
+// solved, and the socp solver's Ipopt fallback keeps to it (as `timeopt temporal --max-memory`).
+TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& solver, double max_memory_mb) {
+  if (!(max_memory_mb >= 0.0) || !std::isfinite(max_memory_mb)) {
+    throw py::value_error("max_memory_mb: expected a number >= 0 (0: no budget)");
+  }
+  const TemporalBackend backend = BackendFrom(solver);
+  const auto budget = static_cast<std::int64_t>(max_memory_mb * 1024 * 1024);
+  std::unique_ptr<TemporalSolver> s;
+  if (budget > 0) {
+    const std::int64_t peak = TemporalPeakBytes(problem, backend);
+    if (peak > budget) {
+      throw py::value_error("max_memory_mb: the problem's " + std::to_string(problem.curve.num_pieces()) + " x " +
+                            std::to_string(problem.cells_per_piece) + " cells need about " +
+                            std::to_string(peak >> 20) + " MiB with " + solver + ", above the budget of " +
+                            std::to_string(budget >> 20) + " MiB");
+    }
+    if (backend == TemporalBackend::kSocp) {
+      SocpTemporalOptions options;
+      options.max_memory_bytes = budget;
+      s = MakeSocpTemporalSolver(options);
+    }
+  }
+  if (!s) s = MakeTemporalSolver(backend);
   py::gil_scoped_release release;
   return s->Solve(problem);
 }
@@ -613,8 +636,9 @@ PYBIND11_MODULE(timeopt, m) {
         return s.str();
       });
 
-  m.def("solve", &SolveProblem, py::arg("problem"), py::arg("solver") = "socp",
-        "Solves a TemporalProblem with 'socp' (our conic solver) or 'ipopt'. The GIL is released while it runs.");
+  m.def("solve", &SolveProblem, py::arg("problem"), py::arg("solver") = "socp", py::arg("max_memory_mb") = 0.0,
+        "Solves a TemporalProblem with 'socp' (our conic solver) or 'ipopt'. max_memory_mb > 0: a problem whose "
+        "estimated peak is above it raises ValueError before it is solved. The GIL is released while it runs.");
 
   m.def(
       "time_solves",

@@ -149,6 +149,12 @@ def test_bad_shapes_and_types_are_clear_exceptions():
             problem.K = bad
     with pytest.raises(ValueError, match=r"K: expected an integer"):
         timeopt.plan(FOREST, [1, 1, 1.5], [19, 19, 1.5], K=2.5)
+    # A memory budget below the solve's estimated peak (64 MiB for the process alone): ValueError.
+    with pytest.raises(ValueError, match="max_memory_mb: the problem's 1 x 50 cells need about"):
+        timeopt.solve(timeopt.load_problem(LINE), max_memory_mb=1)
+    with pytest.raises(ValueError, match="max_memory_mb: expected a number >= 0"):
+        timeopt.solve(timeopt.load_problem(LINE), max_memory_mb=-1)
+    assert timeopt.solve(timeopt.load_problem(LINE), max_memory_mb=1000).status == timeopt.TemporalStatus.optimal
     problem.K = np.int64(40)
     assert problem.K == 40 and timeopt.TemporalProblem(curve, K=7).K == 7
     # float32 and integer input are converted, not refused.
