@@ -119,19 +119,21 @@ struct TemporalProblem {
   // Jerk-limited mode (limits.max_jerk set): the jerk rows are not convex, so the SOCP backend
   // solves a sequence of convex problems, each conservative for the true jerk limit (sequential
   // convex programming). It stops when T changes by less than scp_tolerance relative, or after
-  // max_scp_iterations convex solves after the first (jerk-free) one. The Ipopt backend writes the
-  // jerk rows exactly and solves once (these two are not used). scp_tolerance in (0, 0.1],
-  // max_scp_iterations in [1, 100].
+  // max_scp_iterations convex solves after the first (jerk-free) one. A programme that ends
+  // otherwise (out of iterations, or a convex solve that failed) answers only if its last step
+  // changed T by at most 1%, with reduced_accuracy; else iteration_limit or numerical_error. The
+  // Ipopt backend writes the jerk rows exactly and solves once (these two are not used).
+  // scp_tolerance in (0, 0.1], max_scp_iterations in [1, 100].
   double scp_tolerance = 1e-4;
   // An infeasible problem answers with the closest boundary it can fly instead (the result's
   // boundary_relaxation), and the minimum time for it:
-  // - the paper's and certified rows without lambda_a or a jerk limit (their rows make a chain
-  //   along the path): the start speed lowered as little as possible, then the end speed, along
-  //   their tangents; boundary accelerations are not relaxed;
-  // - a jerk limit or lambda_a, with a start in motion: the start state scaled towards rest, its
-  //   velocity by the largest lambda (within 0.01) that can be flown and its acceleration by
-  //   lambda^2 (what the same curve gives at that speed; a braking start keeps its braking along
-  //   the path when it can). A jerk-limited solve that fails numerically is relaxed the same way (a
+  // - the paper's and certified rows without lambda_a, a jerk limit or the quadrotor's limits (their
+  //   rows make a chain along the path): the start speed lowered as little as possible, then the
+  //   end speed, along their tangents; boundary accelerations are not relaxed;
+  // - a jerk limit, lambda_a or the quadrotor's norm, thrust and tilt limits, with a start in
+  //   motion: the start state scaled towards rest, its velocity by the largest lambda (within 0.01)
+  //   that can be flown and its acceleration by lambda^2 (what the same curve gives at that speed;
+  //   a braking start keeps its braking along the path when it can). A jerk-limited solve that fails numerically is relaxed the same way (a
   //   start exactly at a limit leaves an interior-point method no interior at the first grid point).
   // Otherwise the status stays infeasible, with the diagnosis.
   bool relax_boundary = false;
