@@ -127,11 +127,11 @@ struct TemporalProblem {
   double scp_tolerance = 1e-4;
   // An infeasible problem answers with the closest boundary it can fly instead (the result's
   // boundary_relaxation), and the minimum time for it:
-  // - the paper's and certified rows without lambda_a, a jerk limit or the quadrotor's limits (their
-  //   rows make a chain along the path): the start speed lowered as little as possible, then the
-  //   end speed, along their tangents; boundary accelerations are not relaxed;
-  // - a jerk limit, lambda_a or the quadrotor's norm, thrust and tilt limits, with a start in
-  //   motion: the start state scaled towards rest, its velocity by the largest lambda (within 0.01)
+  // - the paper's and certified rows where they make a chain along the path (no lambda_a, jerk
+  //   limit or quadrotor acceleration cones): the start speed lowered as little as possible, then
+  //   the end speed, along their tangents; boundary accelerations are not relaxed;
+  // - otherwise (a jerk limit, lambda_a, or the cones of max_acceleration_norm, the thrust and the
+  //   tilt), with a start in motion: the start state scaled towards rest, its velocity by the largest lambda (within 0.01)
   //   that can be flown and its acceleration by lambda^2 (what the same curve gives at that speed;
   //   a braking start keeps its braking along the path when it can). A jerk-limited solve that fails numerically is relaxed the same way (a
   //   start exactly at a limit leaves an interior-point method no interior at the first grid point).
