@@ -34,9 +34,10 @@ struct ConicArgs {
 // LP of 2e5 variables and 2e6 non-zeros, 517 MB). Fill-in of the KKT factor (cones over scattered
 // variables) can add more: not counted.
 double ConicPeakBytes(const conic::Problem& p) {
+  constexpr double kProcessBytes = 64.0 * (1 << 20), kRowBytes = 400.0, kNonZeroBytes = 200.0;
   const double rows = static_cast<double>(p.num_variables()) + p.num_equalities() + p.num_cone_rows();
   const double nonzeros = static_cast<double>(p.A.nonZeros()) + p.G.nonZeros();
-  return 64.0 * (1 << 20) + 400.0 * rows + 200.0 * nonzeros;
+  return kProcessBytes + kRowBytes * rows + kNonZeroBytes * nonzeros;
 }
 
 int RunConic(const ConicArgs& args) {

@@ -23,6 +23,10 @@ constexpr double kSamePoint = 1e-6;
 // default plan has 22).
 constexpr double kMaxPlanPieces = 1e4;
 
+// The parts of a segment of `length` metres at most max_length long each (as a double: counted
+// before any is made, and Plan refuses counts above kMaxPlanPieces).
+double SegmentParts(double length, double max_length) { return std::max(1.0, std::ceil(length / max_length)); }
+
 // PlanResult's min_interior_speed and min_curvature_radius (see planner.h): on a 10 ms grid more
 // than 1 s from either end, the speed and |v|^3 / |v x a| (the curve's radius of curvature). At
 // most kQualitySamples points: a flight of 2e7 s (limits of 1e-6) took 2e9 of them, a hang.
@@ -238,11 +242,12 @@ double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double s
   return smallest;
 }
 
+
 Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
   std::vector<Eigen::Vector3d> out;
   for (Eigen::Index i = 0; i + 1 < waypoints.cols(); ++i) {
     const Eigen::Vector3d a = waypoints.col(i), b = waypoints.col(i + 1);
-    const int parts = std::max(1, static_cast<int>(std::ceil((b - a).norm() / max_length)));
+    const int parts = static_cast<int>(SegmentParts((b - a).norm(), max_length));
     for (int k = 0; k < parts; ++k) out.push_back(a + (b - a) * (static_cast<double>(k) / parts));
   }
   if (waypoints.cols() > 0) out.push_back(waypoints.col(waypoints.cols() - 1));
@@ -340,7 +345,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     const double shortest = options.max_segment_length / std::pow(2.0, options.max_attempts - 1);
     double pieces = 0.0;
     for (Eigen::Index i = 0; i + 1 < path.waypoints.cols(); ++i) {
-      pieces += std::max(1.0, std::ceil((path.waypoints.col(i + 1) - path.waypoints.col(i)).norm() / shortest));
+      pieces += SegmentParts((path.waypoints.col(i + 1) - path.waypoints.col(i)).norm(), shortest);
     }
     if (!(pieces <= kMaxPlanPieces)) {
       std::ostringstream message;

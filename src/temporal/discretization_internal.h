@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <functional>
 #include <optional>
@@ -27,6 +28,31 @@ inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // Relative slack for checking rows made only of constants (fixed grid values): rounding in
 // |v|^2 / |f'|^2 and back is ~1e-15; 1e-9 keeps "exactly at the limit" feasible.
 inline constexpr double kConstantRowSlack = 1e-9;
+
+// The largest value along the unit direction u that per-axis limits allow: min over the axes of
+// limit / |u_axis| (axes that u hardly touches, |u_axis| <= 1e-12, bound nothing). Infinite when
+// none does.
+inline double LimitAlong(const Eigen::Vector3d& limit, const Eigen::Vector3d& u) {
+  double along = std::numeric_limits<double>::infinity();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(u(axis)) > 1e-12) along = std::min(along, limit(axis) / std::abs(u(axis)));
+  }
+  return along;
+}
+
+// A piece's length from |f'| at 16 midpoints (a sizing estimate, not ArcLength's exact one).
+inline double PieceLengthEstimate(const PiecewiseCurve& curve, int piece) {
+  double length = 0.0;
+  for (int k = 0; k < 16; ++k) length += curve.Evaluate(piece, (k + 0.5) / 16.0, 1).norm() / 16.0;
+  return length;
+}
+
+// Where half point j (0 .. 2 K) of a piece with cell edges `edges` lies in s: the cells' ends and
+// middles.
+inline double HalfPointS(const std::vector<double>& edges, int j) {
+  const int k = std::min(j / 2, static_cast<int>(edges.size()) - 2);
+  return edges[static_cast<size_t>(k)] + 0.5 * (j - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
+}
 
 inline double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));

@@ -78,21 +78,9 @@ Infeasibility DiagnoseInfeasible(const TemporalProblem& problem, const std::stri
   relaxed->reset();
   if (problem.limits.max_acceleration_change) return FromMessage(message);
   if (problem.limits.max_jerk) {
-    // The presolve's own certificates first (a boundary acceleration the jerk limit cannot unwind,
-    // one across the path that the curvature does not give).
+    // The presolve's own certificates first (a boundary acceleration above a limit, one the jerk
+    // limit cannot unwind, one across the path that the curvature does not give).
     if (message.find("boundary.") != std::string::npos) return FromMessage(message);
-    // A boundary acceleration beyond a per-axis limit.
-    for (const bool end : {false, true}) {
-      const Eigen::Vector3d acc = end ? problem.boundary.end_acceleration : problem.boundary.start_acceleration;
-      for (int a = 0; a < 3; ++a) {
-        if (std::abs(acc(a)) > problem.limits.max_acceleration(a) * (1.0 + 1e-9)) {
-          std::ostringstream detail;
-          detail << "the " << (end ? "end" : "start") << " acceleration " << acc(a) << " m/s^2 on axis "
-                 << "xyz"[a] << " is above its limit " << problem.limits.max_acceleration(a) << " m/s^2";
-          return Infeasibility{"boundary_acceleration", end ? "end" : "start", detail.str()};
-        }
-      }
-    }
     // Without the jerk limit (and the boundary accelerations it needs) the problem only gets
     // easier: a cause found there (a start too fast for the limits or to brake in time, an end
     // speed out of reach) holds here too. Its speeds are not this problem's nearest ones, so no

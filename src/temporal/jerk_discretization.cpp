@@ -96,6 +96,9 @@ constexpr double kRestGrading = 1.25;
 constexpr double kBrakeCellShare = 0.5;
 constexpr double kBrakePhaseShare = 1.0 / 8.0;
 constexpr double kSmallestBrakeCell = 1e-3;
+// Where a nominal cell could brake, graded braking cells only if their grading back to the nominal
+// cell takes at most this share of the K cells (BrakeCellSize).
+constexpr double kBrakeGradingShare = 1.0 / 6.0;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
 constexpr double kLargestRestCell = 0.25;
@@ -824,6 +827,15 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
   const auto infeasible = [&](const std::string& why) {
     if (!c.d.infeasible_reason) c.d.infeasible_reason = field + " cannot be reached: " + why;
   };
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(acc(axis)) > p.limits.max_acceleration(axis) * (1.0 + internal::kConstantRowSlack)) {
+      std::ostringstream ss;
+      ss << acc(axis) << " m/s^2 on axis " << internal::kAxisNames[axis] << " is above its limit "
+         << p.limits.max_acceleration(axis) << " m/s^2";
+      infeasible(ss.str());
+      return;
+    }
+  }
   if (f1.norm() > p.zero_tangent_tolerance) {
     // b is fixed by the boundary velocity; the part across the path is f'' b.
     const double b = v.fixed;
@@ -847,10 +859,7 @@ void AddBoundaryAcceleration(JerkContext& c, bool end) {
       // least a^2 / (2 j_t): below that speed the vehicle would have to reverse.
       const double a_path = (end ? 1.0 : -1.0) * acc.dot(unit);  // > 0: braking away from the end
       const double speed = f1.norm();
-      double j = std::numeric_limits<double>::infinity();
-      for (int axis = 0; axis < 3; ++axis) {
-        if (std::abs(unit(axis)) > 1e-12) j = std::min(j, (*p.limits.max_jerk)(axis) / std::abs(unit(axis)));
-      }
+      const double j = internal::LimitAlong(*p.limits.max_jerk, unit);
       const double v_path = std::sqrt(b) * speed;
       if (a_path > 0.0 && std::isfinite(j) && v_path < a_path * a_path / (2.0 * j) * (1.0 - 1e-9)) {
         std::ostringstream ss;
@@ -936,14 +945,10 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
   const Eigen::Vector3d f1 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 1);
   const double speed = f1.norm();
   if (!(speed > p.zero_tangent_tolerance)) return 0.0;
-  double v = kInf, a = kInf, j = kInf;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double u = std::abs(f1(axis)) / speed;
-    if (u <= 1e-12) continue;
-    v = std::min(v, p.limits.max_velocity(axis) / u);
-    a = std::min(a, p.limits.max_acceleration(axis) / u);
-    j = std::min(j, (*p.limits.max_jerk)(axis) / u);
-  }
+  const Eigen::Vector3d unit = f1 / speed;
+  double v = internal::LimitAlong(p.limits.max_velocity, unit);
+  double a = internal::LimitAlong(p.limits.max_acceleration, unit);
+  const double j = internal::LimitAlong(*p.limits.max_jerk, unit);
   // The quadrotor's limits on an acceleration a w along w = the tangent (leaving rest) or minus it
   // (reaching rest): ||a w + g e3||^2 = a^2 + 2 a g w_z + g^2 <= max_thrust^2, a w_z + g >= min_thrust,
   // and along a level w the tilt allows g tan(tilt).
@@ -969,9 +974,7 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
   if (rest_to_rest) {
     // From rest to rest within the piece, a line of length P peaks at (P j^2 / 2)^(1/3) (jerk +j,
     // -j, -j, +j over equal times) when neither a nor v is reached. P from |f'| at 16 midpoints.
-    double length = 0.0;
-    for (int k = 0; k < 16; ++k) length += p.curve.Evaluate(piece, (k + 0.5) / 16.0, 1).norm() / 16.0;
-    peak = std::min(peak, std::cbrt(0.5 * length * j * j));
+    peak = std::min(peak, std::cbrt(0.5 * internal::PieceLengthEstimate(p.curve, piece) * j * j));
   }
   const double length = peak * peak * peak / (6.0 * j * j);
   return std::isfinite(length) ? length / speed : 0.0;
@@ -1026,11 +1029,8 @@ RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
   // The braking phase along the tangent: the jerk limit along it brings sddot back to 0 in
   // t = |a| / j, over v t - |a| t^2 / 2 + j t^3 / 6 metres; in a quadratic cell the s-jerk is at
   // most j / (the cell's largest sdot), so that phase needs cells of a fraction of its length.
-  double j = std::numeric_limits<double>::infinity();
   const double speed = std::sqrt(t2);
-  for (int axis = 0; axis < 3; ++axis) {
-    if (std::abs(f1(axis)) > 1e-12 * speed) j = std::min(j, (*p.limits.max_jerk)(axis) * speed / std::abs(f1(axis)));
-  }
+  const double j = internal::LimitAlong(*p.limits.max_jerk, f1 / speed);
   // The braking along the path, m/s^2 (the acceleration's tangential part), and the speed, m/s.
   const double a_path = (end ? 1.0 : -1.0) * acc.dot(f1) / speed, v_path = std::sqrt(b) * speed;
   const double must = kBrakeCellShare * b / slope_against;
@@ -1045,7 +1045,7 @@ RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
   // come from the rest of the piece (at K = 20, 1 m/s braking at 1 m/s^2 on a 10 m line took 4.16 s
   // with 6 graded cells, 4.00 s without; at K = 200, 0.5 m/s at 2 m/s^2 took 4.29 s without them,
   // 4.23 s with them).
-  if (!(must < 1.0 / K) && std::log(1.0 / (K * h)) / std::log(kRestGrading) > K / 6.0) return r;
+  if (!(must < 1.0 / K) && std::log(1.0 / (K * h)) / std::log(kRestGrading) > kBrakeGradingShare * K) return r;
   r.cell = h;
   r.halved = true;
   r.braking = true;

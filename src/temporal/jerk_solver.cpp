@@ -313,7 +313,7 @@ std::vector<double> GridValues(const TemporalDiscretization& d, const std::vecto
 // point: the rows are conservative at any linearization point.
 void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d, std::vector<double>* b) {
   if (!p.limits.max_jerk || b->size() != d.grid.size() || d.cell_edges.empty()) return;
-  const int m = d.num_pieces, half = d.cells_per_piece, full = half / 2;
+  const int m = d.num_pieces, half = d.cells_per_piece;
   for (const bool end : {false, true}) {
     const int piece = end ? m - 1 : 0;
     const double at = end ? 1.0 : 0.0;
@@ -327,10 +327,7 @@ void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d,
     // The acceleration along the path, away from the end (time runs backwards from an end).
     const double a0 = (end ? -1.0 : 1.0) * acc.dot(unit);
     if (!(a0 < 0.0)) continue;
-    double j = std::numeric_limits<double>::infinity();
-    for (int axis = 0; axis < 3; ++axis) {
-      if (std::abs(unit(axis)) > 1e-12) j = std::min(j, (*p.limits.max_jerk)(axis) / std::abs(unit(axis)));
-    }
+    const double j = internal::LimitAlong(*p.limits.max_jerk, unit);
     if (!std::isfinite(j) || !(j > 0.0)) continue;
     // Speed against distance along the tangent: time for distance by bisection on the monotone
     // s(t) = v0 t + a0 t^2 / 2 + j t^3 / 6 while the speed stays >= 0 (its minimum at t = -a0 / j).
@@ -351,8 +348,7 @@ void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d,
     const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(piece)];
     for (int jh = 0; jh <= half; ++jh) {
       const int h = end ? half - jh : jh;
-      const int k = std::min(h / 2, full - 1);
-      const double s = edges[static_cast<size_t>(k)] + 0.5 * (h - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
+      const double s = internal::HalfPointS(edges, h);
       const double distance = speed * (end ? 1.0 - s : s);
       const double cap = speed_at(distance) / speed;
       double& value = (*b)[static_cast<size_t>(d.GridIndex(piece, h))];
@@ -754,9 +750,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     // the structured path past its iteration limit (limits of 1e2-1e6 on the default plan's curve).
     {
       double length = 0.0;
-      for (int i = 0; i < problem.curve.num_pieces(); ++i) {
-        for (int k = 0; k < 16; ++k) length += problem.curve.Evaluate(i, (k + 0.5) / 16.0, 1).norm() / 16.0;
-      }
+      for (int i = 0; i < problem.curve.num_pieces(); ++i) length += internal::PieceLengthEstimate(problem.curve, i);
       const double j = problem.limits.max_jerk->minCoeff();
       const double reachable = std::cbrt(0.5 * length * j * j);
       if (std::isfinite(reachable) && reachable > 0.0) {
@@ -795,9 +789,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       for (int j = 0; j <= 2 * K; ++j) {
         const GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, j))];
         if (g.var < 0) continue;
-        const int k = std::min(j / 2, K - 1);
-        const double u = 0.5 * (j - 2 * k);
-        const double at = guess_cells * (edges[static_cast<size_t>(k)] + u * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]));
+        const double at = guess_cells * internal::HalfPointS(edges, j);
         const int c = std::min(static_cast<int>(at), guess_cells - 1);
         const double w = at - c;
         const double b = (1.0 - w) * std::max(0.0, cd.GridB(cd.GridIndex(i, c), cx)) +
@@ -1027,8 +1019,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       for (int i = 0; i < d.num_pieces; ++i) {
         const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(i)];
         for (int j = 0; j <= 2 * K; ++j) {
-          const int k = std::min(j / 2, K - 1);
-          const double at = edges[static_cast<size_t>(k)] + 0.5 * (j - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
+          const double at = internal::HalfPointS(edges, j);
           const GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, j))];
           double value = g.fixed;
           if (g.var >= 0) {

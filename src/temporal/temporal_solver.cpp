@@ -216,13 +216,16 @@ bool IpoptTemporalOptions::IsValid(std::string* error) const {
 }
 
 std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend backend) {
-  constexpr double kProcess = 64.0 * (1 << 20);
+  // Bytes, from the measured peaks per cell rounded up (see the declaration): the process, then per
+  // cell with the SOCP backend (paper and certified rows / jerk-limited) and with Ipopt (likewise).
+  constexpr double kProcessBytes = 64.0 * (1 << 20);
+  constexpr double kSocpCellBytes = 10e3, kSocpJerkCellBytes = 16e3;
+  constexpr double kIpoptCellBytes = 5e3, kIpoptJerkCellBytes = 1e6;
   const bool jerk = problem.limits.max_jerk.has_value();
-  double per_cell = 0.0;
-  if (backend == TemporalBackend::kSocp) per_cell = jerk ? 16e3 : 10e3;
-  else per_cell = jerk ? 1e6 : 5e3;
+  const double per_cell = backend == TemporalBackend::kSocp ? (jerk ? kSocpJerkCellBytes : kSocpCellBytes)
+                                                           : (jerk ? kIpoptJerkCellBytes : kIpoptCellBytes);
   const double cells = static_cast<double>(problem.curve.num_pieces()) * std::max(problem.cells_per_piece, 0);
-  const double bytes = kProcess + cells * per_cell;
+  const double bytes = kProcessBytes + cells * per_cell;
   return bytes < 9e18 ? static_cast<std::int64_t>(bytes) : std::numeric_limits<std::int64_t>::max();
 }
 
@@ -375,16 +378,17 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
                      "), but a rest-to-rest problem whose limits allow hovering always has one (the "
                      "same path, slowly enough): a numerical failure";
   }
-  const bool fallback_fits = jerk_ipopt_fallback_memory() <= 0 ||
-                            TemporalPeakBytes(problem, TemporalBackend::kIpopt) <= jerk_ipopt_fallback_memory();
-  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ && !fallback_fits &&
-      (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
+  const bool fallback = problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ &&
+                        (result.status == TemporalStatus::kNumericalError ||
+                         result.status == TemporalStatus::kIterationLimit);
+  const std::int64_t fallback_bytes = fallback ? TemporalPeakBytes(problem, TemporalBackend::kIpopt) : 0;
+  const bool fallback_fits = jerk_ipopt_fallback_memory() <= 0 || fallback_bytes <= jerk_ipopt_fallback_memory();
+  if (fallback && !fallback_fits) {
     result.message += "; the Ipopt fallback was skipped: its exact rows would need about " +
-                      std::to_string(TemporalPeakBytes(problem, TemporalBackend::kIpopt) >> 20) +
-                      " MiB, above the memory budget of " + std::to_string(jerk_ipopt_fallback_memory() >> 20) + " MiB";
+                      std::to_string(fallback_bytes >> 20) + " MiB, above the memory budget of " +
+                      std::to_string(jerk_ipopt_fallback_memory() >> 20) + " MiB";
   }
-  if (problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ && fallback_fits &&
-      (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit)) {
+  if (fallback && fallback_fits) {
     // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.
     IpoptTemporalOptions fallback;
     fallback.max_solve_time_in_seconds = jerk_ipopt_fallback_seconds();
