@@ -176,30 +176,43 @@ TemporalBackend BackendFrom(const std::string& name) {
   return backend;
 }
 
-// max_memory_mb > 0: a problem whose TemporalPeakBytes is above it raises ValueError before it is
-// solved, and the socp solver's Ipopt fallback keeps to it (as `timeopt temporal --max-memory`).
-TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& solver, double max_memory_mb) {
+// A budget in bytes from max_memory_mb (0: none), or ValueError.
+std::int64_t TemporalBudget(double max_memory_mb) {
   if (!(max_memory_mb >= 0.0) || !std::isfinite(max_memory_mb)) {
     throw py::value_error("max_memory_mb: expected a number >= 0 (0: no budget)");
   }
-  const TemporalBackend backend = BackendFrom(solver);
-  const auto budget = static_cast<std::int64_t>(max_memory_mb * 1024 * 1024);
-  std::unique_ptr<TemporalSolver> s;
-  if (budget > 0) {
-    const std::int64_t peak = TemporalPeakBytes(problem, backend);
-    if (peak > budget) {
-      throw py::value_error("max_memory_mb: the problem's " + std::to_string(problem.curve.num_pieces()) + " x " +
-                            std::to_string(problem.cells_per_piece) + " cells need about " +
-                            std::to_string(peak >> 20) + " MiB with " + solver + ", above the budget of " +
-                            std::to_string(budget >> 20) + " MiB");
-    }
-    if (backend == TemporalBackend::kSocp) {
-      SocpTemporalOptions options;
-      options.max_memory_bytes = budget;
-      s = MakeSocpTemporalSolver(options);
-    }
+  return static_cast<std::int64_t>(max_memory_mb * 1024 * 1024);
+}
+
+// ValueError when the problem's TemporalPeakBytes with this backend is above the budget (> 0).
+void CheckTemporalBudget(const TemporalProblem& problem, TemporalBackend backend, std::int64_t budget) {
+  if (budget <= 0) return;
+  const std::int64_t peak = TemporalPeakBytes(problem, backend);
+  if (peak > budget) {
+    throw py::value_error("max_memory_mb: the problem's " + std::to_string(problem.curve.num_pieces()) + " x " +
+                          std::to_string(problem.cells_per_piece) + " cells need about " + std::to_string(peak >> 20) +
+                          " MiB with " + ToString(backend) + ", above the budget of " + std::to_string(budget >> 20) +
+                          " MiB");
   }
-  if (!s) s = MakeTemporalSolver(backend);
+}
+
+// A solver of the backend whose socp fallback to Ipopt keeps to the budget (> 0).
+std::unique_ptr<TemporalSolver> MakeBudgetedSolver(TemporalBackend backend, std::int64_t budget) {
+  if (budget > 0 && backend == TemporalBackend::kSocp) {
+    SocpTemporalOptions options;
+    options.max_memory_bytes = budget;
+    return MakeSocpTemporalSolver(options);
+  }
+  return MakeTemporalSolver(backend);
+}
+
+// max_memory_mb > 0: a problem whose TemporalPeakBytes is above it raises ValueError before it is
+// solved, and the socp solver's Ipopt fallback keeps to it (as `timeopt temporal --max-memory`).
+TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& solver, double max_memory_mb) {
+  const std::int64_t budget = TemporalBudget(max_memory_mb);
+  const TemporalBackend backend = BackendFrom(solver);
+  CheckTemporalBudget(problem, backend, budget);
+  std::unique_ptr<TemporalSolver> s = MakeBudgetedSolver(backend, budget);
   py::gil_scoped_release release;
   return s->Solve(problem);
 }
@@ -663,25 +676,33 @@ PYBIND11_MODULE(timeopt, m) {
   // released, for the first to finish). Threads that should solve in parallel use a Solver each.
   struct SharedSolver {
     std::unique_ptr<TemporalSolver> solver;
+    TemporalBackend backend = TemporalBackend::kSocp;
+    std::int64_t budget = 0;  // bytes (0: none)
     std::mutex mutex;
   };
   py::class_<SharedSolver>(m, "Solver",
                            "A reusable temporal solver (keeps its workspaces between solves). Safe to share between "
-                           "threads: its solves run one at a time; use one Solver per thread to solve in parallel.")
-      .def(py::init([](const std::string& solver) {
+                           "threads: its solves run one at a time; use one Solver per thread to solve in parallel. "
+                           "max_memory_mb > 0: each solve is held to it as timeopt.solve's is.")
+      .def(py::init([](const std::string& solver, double max_memory_mb) {
              auto shared = std::make_unique<SharedSolver>();
-             shared->solver = MakeTemporalSolver(BackendFrom(solver));
+             shared->backend = BackendFrom(solver);
+             shared->budget = TemporalBudget(max_memory_mb);
+             shared->solver = MakeBudgetedSolver(shared->backend, shared->budget);
              return shared;
            }),
-           py::arg("solver") = "socp")
+           py::arg("solver") = "socp", py::arg("max_memory_mb") = 0.0)
       .def(
           "solve",
           [](SharedSolver& s, const TemporalProblem& p) {
+            CheckTemporalBudget(p, s.backend, s.budget);
             py::gil_scoped_release release;
             const std::lock_guard<std::mutex> lock(s.mutex);
             return s.solver->Solve(p);
           },
-          py::arg("problem"), "Solves, releasing the GIL; concurrent calls on one Solver run one after the other.");
+          py::arg("problem"),
+          "Solves, releasing the GIL; concurrent calls on one Solver run one after the other. ValueError before "
+          "solving a problem above the Solver's max_memory_mb.");
 
   // ---- trajectories ----
   py::class_<Trajectory>(m, "Trajectory", "A curve traversed by a temporal profile: p, v, a, j against time.")

@@ -8,7 +8,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -52,6 +54,14 @@ inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
       ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
       ->capture_default_str();
 }
+
+// The temporal solver `name` (socp or ipopt) under a memory budget (MiB): a problem whose
+// TemporalPeakBytes is above it is invalid input before anything is solved, and the socp backend's
+// Ipopt fallback keeps to it; ipopt_seconds caps Ipopt's CPU time (temporal_command.cpp).
+std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, const std::string& name,
+                                               int64_t max_memory_mib, std::optional<double> ipopt_seconds);
+// --ipopt-seconds, for BudgetedSolver.
+void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds);
 
 inline void AddSolveMemoryOption(CLI::App* sub, int64_t* mebibytes) {
   sub->add_option("--max-memory", *mebibytes,

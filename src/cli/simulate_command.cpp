@@ -48,6 +48,8 @@ struct SimulateArgs {
   QuadrotorLimitArgs quadrotor;  // override the problem's (or, with --samples, add to the per-axis ones)
   std::string output;
   std::string states;
+  int64_t max_memory_mib = DefaultMemoryBudgetMiB();  // the solve's (PROBLEM.json)
+  std::optional<double> ipopt_seconds;
 };
 
 int RunSimulate(const SimulateArgs& args) {
@@ -113,11 +115,7 @@ int RunSimulate(const SimulateArgs& args) {
       }
       ApplyQuadrotorLimits(args.quadrotor, &problem.limits);
       problem.Validate();
-      TemporalBackend backend = TemporalBackend::kSocp;
-      if (!FromString(args.solver, &backend)) {
-        throw std::invalid_argument("--solver: expected " + EnumChoices(kTemporalBackends));
-      }
-      const TemporalResult result = MakeTemporalSolver(backend)->Solve(problem);
+      const TemporalResult result = BudgetedSolver(problem, args.solver, args.max_memory_mib, args.ipopt_seconds)->Solve(problem);
       if (!result.is_success()) {
         std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
         return ExitCodeFor(result.status);
@@ -195,6 +193,8 @@ void RegisterSimulateCommand(CLI::App& app, Runner& run) {
                   "Relative slack of the verdict (default: 0.01 for a problem with limits.max_jerk and for "
                   "--samples, rounding only (1e-9) otherwise)")
       ->check(CLI::Range(0.0, 1.0));
+  AddSolveMemoryOption(sub, &args->max_memory_mib);
+  AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_option("-o,--output", args->output, "Report JSON file (default: stdout)");
   sub->add_option("--states", args->states,
                   "CSV of the vehicle's state at every controller step (t,x..z,vx..vz,ax..az,jx..jz,ex..ez)");

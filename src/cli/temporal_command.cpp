@@ -51,38 +51,6 @@ struct TemporalArgs {
   std::optional<double> ipopt_seconds;
 };
 
-// The solver `name` under a memory budget (MiB): a problem whose TemporalPeakBytes is above it is
-// invalid input before anything is solved, and the SOCP backend's Ipopt fallback keeps to it.
-std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, const std::string& name,
-                                               int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
-  const TemporalBackend backend = ParseBackend(name);
-  const int64_t budget = max_memory_mib * 1024 * 1024;
-  const int64_t peak = TemporalPeakBytes(problem, backend);
-  if (peak > budget) {
-    std::ostringstream m;
-    m << "the problem's " << problem.curve.num_pieces() << " x " << problem.cells_per_piece << " cells need about "
-      << (peak >> 20) << " MiB with " << name << (problem.limits.max_jerk ? " and a jerk limit" : "")
-      << ", above the memory budget of " << max_memory_mib << " MiB (fewer cells, or a larger --max-memory)";
-    throw std::invalid_argument(m.str());
-  }
-  if (backend == TemporalBackend::kSocp) {
-    SocpTemporalOptions options;
-    options.max_memory_bytes = budget;
-    if (ipopt_seconds) options.jerk_ipopt_fallback_seconds = *ipopt_seconds;
-    return MakeSocpTemporalSolver(options);
-  }
-  IpoptTemporalOptions options;
-  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
-  return MakeIpoptTemporalSolver(options);
-}
-
-void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds) {
-  sub->add_option("--ipopt-seconds", *seconds,
-                  "CPU seconds for an Ipopt solve: --solver ipopt (default 300), or the socp solver's fallback to "
-                  "Ipopt's exact jerk rows (default 20; 0: none)")
-      ->check(CLI::NonNegativeNumber);
-}
-
 // Writes the SOCP of `problem` (the one the socp backend solves) as CBF. When presolve has already
 // decided the problem there is no program to write, or when the file cannot be written: a warning,
 // and the solve's exit code stands.
@@ -280,6 +248,37 @@ int RunWaypoints(const WaypointsArgs& args) {
 }
 
 }  // namespace
+
+std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, const std::string& name,
+                                               int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
+  const TemporalBackend backend = ParseBackend(name);
+  const int64_t budget = max_memory_mib * 1024 * 1024;
+  const int64_t peak = TemporalPeakBytes(problem, backend);
+  if (peak > budget) {
+    std::ostringstream m;
+    m << "the problem's " << problem.curve.num_pieces() << " x " << problem.cells_per_piece << " cells need about "
+      << (peak >> 20) << " MiB with " << name << (problem.limits.max_jerk ? " and a jerk limit" : "")
+      << ", above the memory budget of " << max_memory_mib << " MiB (fewer cells, or a larger --max-memory)";
+    throw std::invalid_argument(m.str());
+  }
+  if (backend == TemporalBackend::kSocp) {
+    SocpTemporalOptions options;
+    options.max_memory_bytes = budget;
+    if (ipopt_seconds) options.jerk_ipopt_fallback_seconds = *ipopt_seconds;
+    return MakeSocpTemporalSolver(options);
+  }
+  IpoptTemporalOptions options;
+  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
+  return MakeIpoptTemporalSolver(options);
+}
+
+void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds) {
+  sub->add_option("--ipopt-seconds", *seconds,
+                  "CPU seconds for an Ipopt solve: --solver ipopt (default 300), or the socp solver's fallback to "
+                  "Ipopt's exact jerk rows (default 20; 0: none)")
+      ->check(CLI::NonNegativeNumber);
+}
+
 
 void RegisterTemporalCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<TemporalArgs>();

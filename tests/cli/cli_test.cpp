@@ -168,6 +168,11 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   r = RunCli("temporal " + line + " --max-memory 1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("above the memory budget of 1 MiB"));
+  // simulate solves the same problem first, under the same budget, before it flies anything.
+  r = RunCli("simulate " + line + " --max-memory 1 -o " + Path("sim.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output, HasSubstr("above the memory budget of 1 MiB"));
+  EXPECT_FALSE(std::filesystem::exists(Path("sim.json")));
   // --ipopt-seconds: Ipopt's CPU cap; 0 turns the socp solver's fallback off, and is no cap for Ipopt.
   r = RunCli("temporal " + line + " --ipopt-seconds 0");
   EXPECT_EQ(r.exit_code, 0) << r.output;

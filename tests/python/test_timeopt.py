@@ -155,6 +155,15 @@ def test_bad_shapes_and_types_are_clear_exceptions():
     with pytest.raises(ValueError, match="max_memory_mb: expected a number >= 0"):
         timeopt.solve(timeopt.load_problem(LINE), max_memory_mb=-1)
     assert timeopt.solve(timeopt.load_problem(LINE), max_memory_mb=1000).status == timeopt.TemporalStatus.optimal
+    # A reusable Solver holds each solve to its budget the same way, and still solves after a refusal.
+    for name in ("socp", "ipopt"):
+        budgeted = timeopt.Solver(name, max_memory_mb=1)
+        with pytest.raises(ValueError, match="max_memory_mb: the problem's 1 x 50 cells need about .* with " + name):
+            budgeted.solve(timeopt.load_problem(LINE))
+        roomy = timeopt.Solver(name, max_memory_mb=1000)
+        assert roomy.solve(timeopt.load_problem(LINE)).status == timeopt.TemporalStatus.optimal
+    with pytest.raises(ValueError, match="max_memory_mb: expected a number >= 0"):
+        timeopt.Solver("socp", max_memory_mb=float("nan"))
     problem.K = np.int64(40)
     assert problem.K == 40 and timeopt.TemporalProblem(curve, K=7).K == 7
     # float32 and integer input are converted, not refused.
