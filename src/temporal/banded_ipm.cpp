@@ -939,10 +939,11 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
     }
   }
   // Each unknown's cap for the start: the upper bound of its free value (of its cell's middle for a
-  // control value), or the largest finite one.
+  // control value), or the largest finite one (but the cap near a vanishing tangent, which is no
+  // measure of the speeds elsewhere).
   double cap = 0.0;
   for (double u : d.var_upper) {
-    if (std::isfinite(u)) cap = std::max(cap, u);
+    if (std::isfinite(u) && u < kSlowTangentCap) cap = std::max(cap, u);
   }
   if (!(cap > 0.0)) cap = 1.0;
   p.cap.assign(static_cast<size_t>(p.n), cap);

@@ -440,6 +440,19 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   }
   d.num_vars = next_var;
   d.var_upper.assign(static_cast<size_t>(next_var), std::numeric_limits<double>::infinity());
+  if (!limits.max_jerk) {
+    for (int i = 0; i < m; ++i) {
+      double t_max = 0.0;
+      for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
+      for (int k = 0; k <= K; ++k) {
+        const int g = d.GridIndex(i, k);
+        const int var = d.grid[static_cast<size_t>(g)].var;
+        if (var < 0 || !(grid_tangent[static_cast<size_t>(g)].norm() < kSlowTangentShare * t_max)) continue;
+        double& upper = d.var_upper[static_cast<size_t>(var)];
+        upper = std::min(upper, kSlowTangentCap);
+      }
+    }
+  }
   if (free != nullptr) {
     for (int e = 0; e < 2; ++e) {
       if (free->var[e] >= 0) d.var_upper[static_cast<size_t>(free->var[e])] = free->given_b[e] / free->scale[e];

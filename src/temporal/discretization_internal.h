@@ -28,6 +28,17 @@ inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 // Relative slack for checking rows made only of constants (fixed grid values): rounding in
 // |v|^2 / |f'|^2 and back is ~1e-15; 1e-9 keeps "exactly at the limit" feasible.
 inline constexpr double kConstantRowSlack = 1e-9;
+// Without a jerk limit, where |f'| at a grid point is below kSlowTangentShare of its largest on
+// the piece (near a vanishing tangent: a minimum-jerk curve's rest end), the unknown x = b / S_i
+// (AssignGridValues) is at most kSlowTangentCap = 1 / kSlowTangentShare^2: sdot at most
+// 1 / kSlowTangentShare times what moves the piece's longest tangent at the reference speed.
+// Nothing else bounds b there but the acceleration rows beside it, and b reached 1e6 to 1e9
+// times its value elsewhere on slow, long curves, where the conic solver stalled (at K = 1 on a
+// straight piece T had no minimum). The time given up is that of the last stretch before the
+// end where the optimum's sdot would be above the cap. 1e-3 left one of the property sweep's
+// three such problems stalled.
+inline constexpr double kSlowTangentShare = 1e-2;
+inline constexpr double kSlowTangentCap = 1.0 / (kSlowTangentShare * kSlowTangentShare);
 
 // The largest value along the unit direction u that per-axis limits allow: min over the axes of
 // limit / |u_axis| (axes that u hardly touches, |u_axis| <= 1e-12, bound nothing). Infinite when
