@@ -387,14 +387,24 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
       for (int k = 0; k < K; ++k) path += grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm() / K;
     }
     const double boundary2 = std::max(problem.boundary.start_velocity.squaredNorm(), problem.boundary.end_velocity.squaredNorm());
-    if (accel > 0.0 && std::isfinite(accel) && std::isfinite(path)) {
+    // (The grid's tangents can all vanish, a minimum-jerk piece at K = 1: no length, no cap.)
+    if (accel > 0.0 && std::isfinite(accel) && std::isfinite(path) && boundary2 + path > 0.0) {
       reach2 = kUnreachableSpeedShare * (boundary2 + 2.0 * accel * path);
+    }
+  }
+  // The largest tangent of each piece on its grid, or, where every grid tangent vanishes (a
+  // minimum-jerk piece at K = 1), at its cell middles.
+  std::vector<double> piece_tangent(static_cast<size_t>(m), 0.0);
+  for (int i = 0; i < m; ++i) {
+    double& t_max = piece_tangent[static_cast<size_t>(i)];
+    for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
+    for (int k = 0; k < K && !(t_max > problem.zero_tangent_tolerance); ++k) {
+      t_max = std::max(t_max, curve.Evaluate(i, (k + 0.5) / K, 1).norm());
     }
   }
   std::vector<double> piece_scale(static_cast<size_t>(m), 1.0);
   for (int i = 0; i < m; ++i) {
-    double t_max = 0.0;
-    for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
+    const double t_max = piece_tangent[static_cast<size_t>(i)];
     if (!(t_max > problem.zero_tangent_tolerance)) continue;
     double speed2 = std::min(vref * vref, reach2);
     if (aref > 0.0) speed2 = std::min(speed2, aref * t_max);
@@ -442,8 +452,7 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
   d.var_upper.assign(static_cast<size_t>(next_var), std::numeric_limits<double>::infinity());
   if (!limits.max_jerk) {
     for (int i = 0; i < m; ++i) {
-      double t_max = 0.0;
-      for (int k = 0; k <= K; ++k) t_max = std::max(t_max, grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm());
+      const double t_max = piece_tangent[static_cast<size_t>(i)];
       for (int k = 0; k <= K; ++k) {
         const int g = d.GridIndex(i, k);
         const int var = d.grid[static_cast<size_t>(g)].var;
@@ -527,6 +536,35 @@ void AddPaperVelocityRows(const TemporalProblem& problem,
                               std::to_string(i) + " s=" + std::to_string(k * ds);
                      });
         }
+      }
+    }
+  }
+  // A grid point where the tangent vanishes bounds nothing. A cell whose two grid points both do
+  // (a minimum-jerk piece at K = 1) gets the velocity at its middle, f'(mid)^2 (b^k + b^{k+1}) / 2
+  // <= vmax^2 (b is linear on the cell): on a straight piece, whose f'' vanishes at the middle,
+  // nothing else bounded b and T had no minimum (Ipopt answered 0.7 ms for a metre).
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < K; ++k) {
+      const int g0 = d.GridIndex(i, k);
+      if (grid_tangent[static_cast<size_t>(g0)].norm() > problem.zero_tangent_tolerance ||
+          grid_tangent[static_cast<size_t>(g0 + 1)].norm() > problem.zero_tangent_tolerance) {
+        continue;
+      }
+      const Eigen::Vector3d t = problem.curve.Evaluate(i, (k + 0.5) * ds, 1);
+      const auto add = [&](double t2, double bound, const char* what, int axis) {
+        row.Add(g0, 0.5 * t2);
+        row.Add(g0 + 1, 0.5 * t2);
+        row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(), bound, [&] {
+          return std::string(what) + (axis >= 0 ? std::string(" on axis ") + kAxisNames[axis] : std::string()) +
+                 " at piece " + std::to_string(i) + " s=" + std::to_string((k + 0.5) * ds);
+        });
+      };
+      if (problem.limits.max_speed && t.norm() > problem.zero_tangent_tolerance) {
+        add(t.squaredNorm(), *problem.limits.max_speed * *problem.limits.max_speed, "squared speed", -1);
+      }
+      for (int a = 0; a < 3; ++a) {
+        if (std::abs(t(a)) <= problem.zero_tangent_tolerance || !std::isfinite(vmax2(a))) continue;
+        add(t(a) * t(a), vmax2(a), "squared velocity", a);
       }
     }
   }

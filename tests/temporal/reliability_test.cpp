@@ -12,6 +12,7 @@
 
 #include "../common/fixtures.h"
 #include "time_domain_reference.h"
+#include "timeopt/io/temporal_io.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {
@@ -224,6 +225,45 @@ TEST(Reliability, IpoptNamesTheRowsItFailedOn) {
   const TemporalResult r = MakeIpoptTemporalSolver()->Solve(p);
   ASSERT_EQ(r.status, TemporalStatus::kInfeasible) << r.message;
   EXPECT_THAT(r.message, ::testing::Not(HasSubstr("jerk")));
+}
+
+// A minimum-jerk piece's tangent vanishes at its rest ends, where nothing bounded b: at K = 1 on a
+// straight piece (f'' = 0 at the only cell's middle) T had no minimum (the conic solver failed,
+// Ipopt answered 0.7 ms for a metre). The paper's velocity row at the middle of a cell beside a
+// vanishing tangent bounds it: with b linear on the cell, T = 1 / sqrt(b) and b <= vmax^2 /
+// f'(1/2)^2, so T = f'(1/2) / vmax = 1.875 / 2 s exactly (x = 10 s^3 - 15 s^4 + 6 s^5).
+TEST(Reliability, AStraightMinimumJerkPieceAtOneCellHasItsClosedForm) {
+  PolynomialPiece::Coefficients c = PolynomialPiece::Coefficients::Zero(3, 6);
+  c.row(0) << 0.0, 0.0, 0.0, 10.0, -15.0, 6.0;
+  TemporalProblem p;
+  p.curve = PiecewiseCurve({PolynomialPiece(c)});
+  p.limits.max_velocity.setConstant(2.0);
+  p.limits.max_acceleration.setConstant(1.0);
+  p.cells_per_piece = 1;
+  p.constraint_mode = ConstraintMode::kPaper;
+  for (TemporalBackend backend : {TemporalBackend::kSocp, TemporalBackend::kIpopt}) {
+    const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << ToString(backend) << ": " << r.message;
+    // Both solvers' tolerances (1e-8 relative) bound the error.
+    EXPECT_NEAR(r.total_time, 0.9375, 1e-7) << ToString(backend);
+  }
+}
+
+// On slow minimum-jerk curves b near a rest end reached 1e6-1e9 times its value elsewhere and the
+// conic solver stalled, or at K = 1 T had no minimum: the property sweep's problems 171, 279 and
+// 351 (seed 1; tests/temporal/data/sweep_minjerk_*.json, paper rows, rest to rest). With b capped
+// near a vanishing tangent (kSlowTangentCap) both backends answer, and agree to the sweep's bound
+// for the convex rows, 1e-6 (both solve the same discretization to 1e-8).
+TEST(Reliability, SlowMinimumJerkCurvesAreAnsweredByBothBackends) {
+  for (const char* index : {"171", "279", "351"}) {
+    const std::string path = std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_minjerk_" + index + ".json";
+    const TemporalProblem p = ReadTemporalProblemJson(path);
+    const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+    const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+    ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << index << ": " << socp.message;
+    ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << index << ": " << ipopt.message;
+    EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6) << index;
+  }
 }
 
 }  // namespace
