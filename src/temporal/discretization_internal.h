@@ -30,16 +30,16 @@ inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 inline constexpr double kConstantRowSlack = 1e-9;
 // Without a jerk limit, where |f'| at a grid point is below kSlowTangentShare of its largest on
 // the piece (near a vanishing tangent: a minimum-jerk curve's rest end), the unknown x = b / S_i
-// (AssignGridValues) is at most kSlowTangentCap = 1 / kSlowTangentShare^2 (2.5e5): sdot at most
+// (AssignGridValues) is at most kSlowTangentCap = 1 / kSlowTangentShare^2 (1e4): sdot at most
 // 1 / kSlowTangentShare times what moves the piece's longest tangent at the reference speed.
 // Nothing else bounds b there but the acceleration rows beside it, and b reached 1e6 to 1e9
 // times its value elsewhere on slow, long curves, where the conic solver stalled (at K = 1 on a
 // straight piece T had no minimum). The time given up is that of the last stretch before the end
-// where the optimum's sdot would be above the cap (+1e-5 of T at 0.01 m/s on the shipped
-// waypoints). Measured on the 18 paper-row minimum-jerk problems of the long property sweep that
-// failed with a cap or without one: a share of 1e-3 / 2e-3 / 3e-3 / 5e-3 / 1e-2 left 3 / 1 / 2 /
-// 3 / 12 of them failing (the tighter caps sit closer to the answer and slowed the conic solver).
-inline constexpr double kSlowTangentShare = 2e-3;
+// where the optimum's sdot would be above the cap (+6.6e-5 of T at 0.05 m/s on the shipped
+// waypoints, paper rows, K = 200). On the long property sweep (10,000 problems, seed 1) a share
+// of 1e-2 left 12 paper-row minimum-jerk problems failing of 82 without the cap; 2e-3, though
+// better on those 12 and the 500 of the short sweep, left more than 25.
+inline constexpr double kSlowTangentShare = 1e-2;
 inline constexpr double kSlowTangentCap = 1.0 / (kSlowTangentShare * kSlowTangentShare);
 
 // The largest value along the unit direction u that per-axis limits allow: min over the axes of

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <initializer_list>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "banded_ipm.h"
@@ -33,18 +34,25 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// A reduced-accuracy answer of the conic solver can miss a row by about 1e-6 of its bound (seen on
-// minimum-jerk curves near their vanishing tangents, where b spans five orders of magnitude). When
-// every row is linear in x and holds at x = 0 (no fixed speed other than 0, no cubic or cone rows:
-// a rest-to-rest problem under the paper's or certified rows), lambda x satisfies them all for the
-// largest lambda <= 1 computed here: scaling b by it slows the profile by 1 / sqrt(lambda), about
-// half the violation. False (x unchanged) when the problem is not of that kind.
+// An answer of the conic solver can miss a row by about 1e-6 of its bound even when it meets its
+// own tolerances: near a minimum-jerk curve's vanishing tangents b spans five orders of magnitude
+// and an acceleration row's two terms cancel (1.3e-6 seen). A reduced-accuracy answer, or one that
+// misses a row by more than kScaleIntoRowsAbove (the rows' units: 1 is the limit; ten times the
+// solver's default tolerance), is scaled into its rows by ScaleIntoRows.
+constexpr double kScaleIntoRowsAbove = 1e-7;
+
+// When there are only linear rows and each one's interval contains 0 (x = 0 satisfies it: a
+// rest-to-rest problem under the paper's or certified rows), lambda x keeps the rows that x
+// satisfies (their values move towards 0) and meets the others for the largest lambda <= 1
+// computed here; scaling b by it slows the profile by 1 / sqrt(lambda), about half the violation.
+// False, x unchanged, when the problem is not of that kind or no lambda > 0 does it (a row whose
+// bound is 0 missed).
 bool ScaleIntoRows(const TemporalDiscretization& d, std::vector<double>* x) {
   if (!d.cubic_rows.empty() || !d.cone_rows.empty()) return false;
   for (const LinearRow& r : d.rows) {
     if (r.lower > 0.0 || r.upper < 0.0) return false;
   }
-  std::vector<double>& v = *x;
+  std::vector<double> v = *x;
   for (double& value : v) value = std::max(value, 0.0);  // b >= 0: its misses are rounding
   double lambda = 1.0;
   for (size_t i = 0; i < v.size(); ++i) {
@@ -58,6 +66,7 @@ bool ScaleIntoRows(const TemporalDiscretization& d, std::vector<double>* x) {
   }
   if (!(lambda > 0.0)) return false;
   for (double& value : v) value *= lambda;
+  *x = std::move(v);
   return true;
 }
 
@@ -275,7 +284,7 @@ class SocpTemporalSolver final : public TemporalSolver {
         result->status = TemporalStatus::kOptimal;
         result->message = r.message;
         result->reduced_accuracy = r.reduced_accuracy;
-        if (r.reduced_accuracy && d.MaxViolation(*x) > 0.0 && ScaleIntoRows(d, x)) {
+        if ((r.reduced_accuracy || d.MaxViolation(*x) > kScaleIntoRowsAbove) && ScaleIntoRows(d, x)) {
           result->message += "; scaled into the rows";
         }
         break;
