@@ -229,8 +229,8 @@ TEST(Reliability, IpoptNamesTheRowsItFailedOn) {
 
 // A minimum-jerk piece's tangent vanishes at its rest ends, where nothing bounded b: at K = 1 on a
 // straight piece (f'' = 0 at the only cell's middle) T had no minimum (the conic solver failed,
-// Ipopt answered 0.7 ms for a metre). The paper's velocity row at the middle of a cell beside a
-// vanishing tangent bounds it: with b linear on the cell, T = 1 / sqrt(b) and b <= vmax^2 /
+// Ipopt answered 0.7 ms for a metre). The paper's velocity row at the middle of a cell whose two
+// grid tangents vanish bounds it: with b linear on the cell, T = 1 / sqrt(b) and b <= vmax^2 /
 // f'(1/2)^2, so T = f'(1/2) / vmax = 1.875 / 2 s exactly (x = 10 s^3 - 15 s^4 + 6 s^5).
 TEST(Reliability, AStraightMinimumJerkPieceAtOneCellHasItsClosedForm) {
   PolynomialPiece::Coefficients c = PolynomialPiece::Coefficients::Zero(3, 6);
