@@ -37,8 +37,9 @@ inline constexpr double kConstantRowSlack = 1e-9;
 // straight piece T had no minimum). The time given up is that of the last stretch before the end
 // where the optimum's sdot would be above the cap (+6.6e-5 of T at 0.05 m/s on the shipped
 // waypoints, paper rows, K = 200). On the long property sweep (10,000 problems, seed 1) a share
-// of 1e-2 left 12 paper-row minimum-jerk problems failing of 82 without the cap; 2e-3, though
-// better on those 12 and the 500 of the short sweep, left more than 25.
+// of 1e-2 left 11 paper-row minimum-jerk problems failing of 82 without the cap; 2e-3, though
+// better on those and the 500 of the short sweep, left more than 25; 2e-2 left 7 (others: the
+// conic solver's conditioning, not monotone in the cap) but cost 3.5e-4 of T at 0.05 m/s.
 inline constexpr double kSlowTangentShare = 1e-2;
 inline constexpr double kSlowTangentCap = 1.0 / (kSlowTangentShare * kSlowTangentShare);
 
