@@ -184,26 +184,14 @@ std::int64_t TemporalBudget(double max_memory_mb) {
   return static_cast<std::int64_t>(max_memory_mb * 1024 * 1024);
 }
 
-// ValueError when the problem's TemporalPeakBytes with this backend is above the budget (> 0).
+// ValueError ("max_memory_mb: ...") when the problem's estimated peak with this backend is above
+// the budget (> 0).
 void CheckTemporalBudget(const TemporalProblem& problem, TemporalBackend backend, std::int64_t budget) {
-  if (budget <= 0) return;
-  const std::int64_t peak = TemporalPeakBytes(problem, backend);
-  if (peak > budget) {
-    throw py::value_error("max_memory_mb: the problem's " + std::to_string(problem.curve.num_pieces()) + " x " +
-                          std::to_string(problem.cells_per_piece) + " cells need about " + std::to_string(peak >> 20) +
-                          " MiB with " + ToString(backend) + ", above the budget of " + std::to_string(budget >> 20) +
-                          " MiB");
+  try {
+    CheckTemporalMemory(problem, backend, budget);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string("max_memory_mb: ") + e.what());
   }
-}
-
-// A solver of the backend whose socp fallback to Ipopt keeps to the budget (> 0).
-std::unique_ptr<TemporalSolver> MakeBudgetedSolver(TemporalBackend backend, std::int64_t budget) {
-  if (budget > 0 && backend == TemporalBackend::kSocp) {
-    SocpTemporalOptions options;
-    options.max_memory_bytes = budget;
-    return MakeSocpTemporalSolver(options);
-  }
-  return MakeTemporalSolver(backend);
 }
 
 // max_memory_mb > 0: a problem whose TemporalPeakBytes is above it raises ValueError before it is
@@ -212,7 +200,7 @@ TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& s
   const std::int64_t budget = TemporalBudget(max_memory_mb);
   const TemporalBackend backend = BackendFrom(solver);
   CheckTemporalBudget(problem, backend, budget);
-  std::unique_ptr<TemporalSolver> s = MakeBudgetedSolver(backend, budget);
+  std::unique_ptr<TemporalSolver> s = MakeBudgetedTemporalSolver(backend, budget);
   py::gil_scoped_release release;
   return s->Solve(problem);
 }
@@ -688,7 +676,7 @@ PYBIND11_MODULE(timeopt, m) {
              auto shared = std::make_unique<SharedSolver>();
              shared->backend = BackendFrom(solver);
              shared->budget = TemporalBudget(max_memory_mb);
-             shared->solver = MakeBudgetedSolver(shared->backend, shared->budget);
+             shared->solver = MakeBudgetedTemporalSolver(shared->backend, shared->budget);
              return shared;
            }),
            py::arg("solver") = "socp", py::arg("max_memory_mb") = 0.0)

@@ -47,12 +47,14 @@ inline int64_t DefaultMemoryBudgetMiB() {
   if (pages <= 0 || page <= 0) return 4096;
   return static_cast<int64_t>(pages) * page / 2 / (1024 * 1024);
 }
+// --max-memory MiB, 1 to 2^40, described by `help` (which says what the budget covers).
+inline void AddMemoryOption(CLI::App* sub, int64_t* mebibytes, const std::string& help) {
+  sub->add_option("--max-memory", *mebibytes, help)->check(CLI::Range(int64_t{1}, int64_t{1} << 40))->capture_default_str();
+}
 inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
-  sub->add_option("--max-memory", *mebibytes,
+  AddMemoryOption(sub, mebibytes,
                   "Memory budget of the distance field, MiB (its peak is 9 bytes per voxel); default: half "
-                  "of this machine's memory")
-      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
-      ->capture_default_str();
+                  "of this machine's memory");
 }
 
 // The temporal solver `name` (socp or ipopt) under a memory budget (MiB): a problem whose
@@ -64,12 +66,10 @@ std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, c
 void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds);
 
 inline void AddSolveMemoryOption(CLI::App* sub, int64_t* mebibytes) {
-  sub->add_option("--max-memory", *mebibytes,
+  AddMemoryOption(sub, mebibytes,
                   "Memory budget of the solve, MiB: a problem whose estimated peak (cells x a measured figure per "
                   "cell, docs/sizes-and-errors.md) is above it is refused before solving; default: half of this "
-                  "machine's memory")
-      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
-      ->capture_default_str();
+                  "machine's memory");
 }
 
 // The default quadrotor for the summaries' flights, with the verdict's slack for `limits`.

@@ -87,11 +87,9 @@ void RegisterConicCommand(CLI::App& app, Runner& run) {
   sub->add_option("--repeat", args->repeat, "Solve N times and report the median solve time")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
-  sub->add_option("--max-memory", args->max_memory_mib,
+  AddMemoryOption(sub, &args->max_memory_mib,
                   "Memory budget, MiB: a problem whose estimated peak (docs/sizes-and-errors.md) is above it "
-                  "is refused before solving; default: half of this machine's memory")
-      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
-      ->capture_default_str();
+                  "is refused before solving; default: half of this machine's memory");
   sub->callback([args, &run] { run = [args] { return RunConic(*args); }; });
 }
 

@@ -253,23 +253,12 @@ std::unique_ptr<TemporalSolver> BudgetedSolver(const TemporalProblem& problem, c
                                                int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
   const TemporalBackend backend = ParseBackend(name);
   const int64_t budget = max_memory_mib * 1024 * 1024;
-  const int64_t peak = TemporalPeakBytes(problem, backend);
-  if (peak > budget) {
-    std::ostringstream m;
-    m << "the problem's " << problem.curve.num_pieces() << " x " << problem.cells_per_piece << " cells need about "
-      << (peak >> 20) << " MiB with " << name << (problem.limits.max_jerk ? " and a jerk limit" : "")
-      << ", above the memory budget of " << max_memory_mib << " MiB (fewer cells, or a larger --max-memory)";
-    throw std::invalid_argument(m.str());
+  try {
+    CheckTemporalMemory(problem, backend, budget);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (fewer cells, or a larger --max-memory)");
   }
-  if (backend == TemporalBackend::kSocp) {
-    SocpTemporalOptions options;
-    options.max_memory_bytes = budget;
-    if (ipopt_seconds) options.jerk_ipopt_fallback_seconds = *ipopt_seconds;
-    return MakeSocpTemporalSolver(options);
-  }
-  IpoptTemporalOptions options;
-  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
-  return MakeIpoptTemporalSolver(options);
+  return MakeBudgetedTemporalSolver(backend, budget, ipopt_seconds);
 }
 
 void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds) {

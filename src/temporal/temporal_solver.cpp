@@ -237,6 +237,30 @@ std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
   throw std::invalid_argument("MakeTemporalSolver: unknown backend");
 }
 
+void CheckTemporalMemory(const TemporalProblem& problem, TemporalBackend backend, std::int64_t max_memory_bytes) {
+  const std::int64_t peak = TemporalPeakBytes(problem, backend);
+  if (max_memory_bytes > 0 && peak > max_memory_bytes) {
+    throw std::invalid_argument("the problem's " + std::to_string(problem.curve.num_pieces()) + " x " +
+                                std::to_string(problem.cells_per_piece) + " cells need about " +
+                                std::to_string(peak >> 20) + " MiB with " + ToString(backend) +
+                                (problem.limits.max_jerk ? " and a jerk limit" : "") + ", above the memory budget of " +
+                                std::to_string(max_memory_bytes >> 20) + " MiB");
+  }
+}
+
+std::unique_ptr<TemporalSolver> MakeBudgetedTemporalSolver(TemporalBackend backend, std::int64_t max_memory_bytes,
+                                                           std::optional<double> ipopt_seconds) {
+  if (backend == TemporalBackend::kSocp) {
+    SocpTemporalOptions options;
+    if (max_memory_bytes > 0) options.max_memory_bytes = max_memory_bytes;
+    if (ipopt_seconds) options.jerk_ipopt_fallback_seconds = *ipopt_seconds;
+    return MakeSocpTemporalSolver(options);
+  }
+  IpoptTemporalOptions options;
+  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
+  return MakeIpoptTemporalSolver(options);
+}
+
 
 namespace {
 

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -145,6 +146,15 @@ std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend b
 std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeIpoptTemporalSolver(const IpoptTemporalOptions& options = {});
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend);
+
+// Throws std::invalid_argument ("the problem's m x K cells need about N MiB with socp, above the
+// memory budget of B MiB") when TemporalPeakBytes of `problem` with `backend` is above the budget
+// (bytes; 0 or less: none). For callers with a budget, before they solve.
+void CheckTemporalMemory(const TemporalProblem& problem, TemporalBackend backend, std::int64_t max_memory_bytes);
+// A solver of `backend` whose socp fallback to Ipopt keeps to the memory budget (bytes; 0 or less:
+// none); ipopt_seconds, when set, caps Ipopt's CPU time (the ipopt backend's, or the fallback's).
+std::unique_ptr<TemporalSolver> MakeBudgetedTemporalSolver(TemporalBackend backend, std::int64_t max_memory_bytes,
+                                                           std::optional<double> ipopt_seconds = std::nullopt);
 
 
 }  // namespace timeopt
