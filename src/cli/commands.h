@@ -111,6 +111,10 @@ struct QuadrotorLimitArgs {
 void AddQuadrotorLimitOptions(CLI::App* sub, QuadrotorLimitArgs* args);
 void ApplyQuadrotorLimits(const QuadrotorLimitArgs& args, VehicleLimits* limits);
 
+// Help of --trajectory (plan, temporal, waypoints).
+inline constexpr const char* kTrajectoryOptionHelp =
+    "Trajectory JSON: the curve and the profile, exact, for `timeopt export` and Python's Trajectory.load";
+
 using Runner = std::function<int()>;
 
 void RegisterCurveCommand(CLI::App& app, Runner& run);
@@ -120,5 +124,6 @@ void RegisterMapCommand(CLI::App& app, Runner& run);
 void RegisterPlanCommand(CLI::App& app, Runner& run);
 void RegisterConicCommand(CLI::App& app, Runner& run);
 void RegisterSimulateCommand(CLI::App& app, Runner& run);
+void RegisterExportCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   RegisterPlanCommand(app, run);
   RegisterConicCommand(app, run);
   RegisterSimulateCommand(app, run);
+  RegisterExportCommand(app, run);
 
   try {
     app.parse(argc, argv);

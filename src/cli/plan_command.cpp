@@ -24,6 +24,7 @@
 #include "timeopt/core/enum_strings.h"
 #include "timeopt/io/planner_io.h"
 #include "timeopt/io/temporal_io.h"
+#include "timeopt/io/trajectory_io.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/sim/quadrotor_sim.h"
@@ -45,7 +46,7 @@ constexpr const char* kDefaultOutput = "results/plan.csv";
 constexpr const char* kDefaultPlot = "results/plan.png";
 
 struct PlanArgs {
-  std::string map, start, goal, config, output, plot;
+  std::string map, start, goal, config, output, plot, trajectory;
   std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
   bool print_config = false;
   bool verbose = false, quiet = false;
@@ -212,6 +213,11 @@ int RunPlan(PlanArgs args) {
       summary["output"] = args.output;
       summary["output_rate_hz"] = rate;
     }
+    if (!args.trajectory.empty()) {
+      EnsureParentDirectory(args.trajectory);
+      WriteTrajectoryJson(trajectory, args.trajectory);
+      summary["trajectory"] = args.trajectory;
+    }
     if (!args.plot.empty()) {
       EnsureParentDirectory(args.plot);
       WritePlanPng(esdf, trajectory, args.plot);
@@ -282,6 +288,7 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
   sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");
+  sub->add_option("--trajectory", args->trajectory, kTrajectoryOptionHelp);
   sub->callback([args, &run] { run = [args] { return RunPlan(*args); }; });
 }
 

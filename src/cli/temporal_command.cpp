@@ -22,6 +22,7 @@
 #include "timeopt/core/files.h"
 #include "timeopt/viz/profile_plot.h"
 #include "timeopt/io/temporal_io.h"
+#include "timeopt/io/trajectory_io.h"
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_socp.h"
 #include "timeopt/temporal/temporal_solver.h"
@@ -43,6 +44,7 @@ struct TemporalArgs {
   std::string solver = ToString(TemporalBackend::kSocp);
   std::string output;
   std::string samples;
+  std::string trajectory;
   double rate = kDefaultSampleRateHz;
   std::string plot;
   std::string export_cbf;
@@ -73,8 +75,8 @@ void ExportSocp(const TemporalProblem& problem, const std::string& path) {
 
 // Solves, writes the requested outputs and returns the exit code.
 int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
-                  const std::string& output, const std::string& samples, double rate,
-                  const std::string& plot, int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
+                  const std::string& output, const std::string& samples, const std::string& trajectory_path,
+                  double rate, const std::string& plot, int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
   const auto solver = BudgetedSolver(problem, solver_name, max_memory_mib, ipopt_seconds);
   const TemporalResult result = solver->Solve(problem);
   // Refuse an over-long sample request before writing the result (not after printing it).
@@ -88,6 +90,7 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
   }
   const Trajectory trajectory(problem.curve, result.profile);
   if (!samples.empty()) WriteTextFile(samples, SamplesToCsv(trajectory.Sample(rate)));
+  if (!trajectory_path.empty()) WriteTrajectoryJson(trajectory, trajectory_path);
   if (!plot.empty()) WriteProfilePlotPng(trajectory, problem.limits, plot);
   return kExitOk;
 }
@@ -95,7 +98,7 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 int RunTemporal(const TemporalArgs& args) {
   TemporalProblem problem = ReadTemporalProblemJson(args.problem);
   if (args.relax_boundary) problem.relax_boundary = true;
-  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.rate, args.plot,
+  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.trajectory, args.rate, args.plot,
                                       args.max_memory_mib, args.ipopt_seconds);
   if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
   return exit_code;
@@ -141,6 +144,7 @@ struct WaypointsArgs {
   std::string solver = ToString(TemporalBackend::kSocp);
   std::string constraint_mode = ToString(kFlightConstraintMode);
   std::string out_dir = "results";
+  std::string trajectory;
   double rate = kDefaultSampleRateHz;
   bool verbose = false, quiet = false, json = false;
   int64_t max_memory_mib = DefaultMemoryBudgetMiB();
@@ -201,6 +205,8 @@ int RunWaypoints(const WaypointsArgs& args) {
   nlohmann::json result_json = nlohmann::json::parse(TemporalResultToJson(result));
   const Trajectory trajectory(problem.curve, result.profile);
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
+  WriteTrajectoryJson(trajectory, (dir / "trajectory.json").string());
+  if (!args.trajectory.empty()) WriteTrajectoryJson(trajectory, args.trajectory);
   WriteProfilePlotPng(trajectory, problem.limits, (dir / "profile.png").string());
   const QuadrotorSim sim = SummaryQuadrotor(problem.limits);
   std::ostringstream flown;
@@ -242,7 +248,8 @@ int RunWaypoints(const WaypointsArgs& args) {
             << ", max |a|/amax: " << result.max_acceleration_ratio << QuadrotorRatios(result) << "\n"
             << flown.str() << "\n"
             << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
-            << ", " << (dir / "samples.csv").string() << ", " << (dir / "profile.png").string()
+            << ", " << (dir / "samples.csv").string() << ", " << (dir / "trajectory.json").string() << ", "
+            << (dir / "profile.png").string()
             << "\n";
   return kExitOk;
 }
@@ -284,6 +291,7 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--plot", args->plot, "PNG of speed, velocity and acceleration against time");
+  sub->add_option("--trajectory", args->trajectory, kTrajectoryOptionHelp);
   AddSolveMemoryOption(sub, &args->max_memory_mib);
   AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("--relax-boundary", args->relax_boundary,
@@ -330,6 +338,7 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
+  sub->add_option("--trajectory", args->trajectory, std::string(kTrajectoryOptionHelp) + " (also written as trajectory.json in --out-dir)");
   AddSolveMemoryOption(sub, &args->max_memory_mib);
   AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr (curve, temporal, flight)");

@@ -17,10 +17,13 @@ Trajectory::Trajectory(PiecewiseCurve curve, TemporalProfile profile)
 }
 
 TrajectoryState Trajectory::Evaluate(double t) const {
-  const TemporalProfile::Point p = profile_.AtTime(t);
+  return AtPoint(profile_.AtTime(t), std::isnan(t) ? 0.0 : std::min(std::max(t, 0.0), duration()));
+}
+
+TrajectoryState Trajectory::AtPoint(const TemporalProfile::Point& p, double t) const {
   const auto d = curve_.piece(p.piece).EvaluateAll(p.s, 3);
   TrajectoryState x;
-  x.t = std::isnan(t) ? 0.0 : std::min(std::max(t, 0.0), duration());
+  x.t = t;
   x.position = d.col(0);
   x.velocity = d.col(1) * p.sdot;
   x.acceleration = d.col(2) * p.sdot * p.sdot + d.col(1) * p.sddot;

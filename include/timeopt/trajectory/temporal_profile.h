@@ -89,6 +89,9 @@ class TemporalProfile {
   double CellLength(int piece, int k) const;
   // True for a profile made by JerkLimited.
   bool jerk_limited() const { return !shapes_.empty(); }
+  // The cell_edges given to JerkLimited (per piece K + 1 edges in s), empty for equal cells: with
+  // half_b() and shape() what rebuilds the same profile (the trajectory file).
+  const std::vector<std::vector<double>>& cell_edges() const { return edges_; }
   // b = sdot^2 at grid point k of piece i (half point 2k of a jerk-limited profile).
   double b(int piece, int k) const { return b_[piece][k]; }
   const std::vector<std::vector<double>>& b() const { return b_; }

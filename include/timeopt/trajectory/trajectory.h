@@ -38,6 +38,9 @@ class Trajectory {
 
   // State at time t, clamped to [0, duration()].
   TrajectoryState Evaluate(double t) const;
+  // The state where the parameter is at `point` (of this trajectory's profile: AtTime, AtS or
+  // InCell), by the chain rule above; t is copied into the state unchanged.
+  TrajectoryState AtPoint(const TemporalProfile::Point& point, double t) const;
   // States at t = 0, 1/rate, 2/rate, ... and at t = duration(). rate_hz > 0 (throws otherwise).
   // At most kMaxSamples states (throws above it, before allocating).
   std::vector<TrajectoryState> Sample(double rate_hz) const;

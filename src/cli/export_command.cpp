@@ -1,0 +1,113 @@
+// `timeopt export TRAJ.json --format csv|polynomial|px4|rosbag -o OUT [--rate HZ]
+//                 [--yaw fixed:RAD|velocity|goal] [--max-yaw-rate RAD_PER_S] [--map MAP]`:
+// a trajectory file (from `plan`, `temporal` or `waypoints` --trajectory) into the flight stack's
+// formats (docs/formats.md, "Exports").
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "commands.h"
+#include "timeopt/core/files.h"
+#include "timeopt/io/trajectory_io.h"
+#include "timeopt/map/occupancy_map.h"
+
+namespace timeopt::cli {
+namespace {
+
+struct ExportArgs {
+  std::string trajectory;
+  std::string format;
+  std::string output;
+  double rate = kDefaultSampleRateHz;
+  std::string yaw = "velocity";
+  double max_yaw_rate = YawOptions().max_rate;
+  std::string map;
+  double voxel_radius = 1.0;
+  double max_position_error = PolynomialFitOptions().max_position_error;
+  double max_velocity_error = PolynomialFitOptions().max_velocity_error;
+};
+
+// "fixed:RAD", "velocity" or "goal".
+YawOptions ParseYaw(const std::string& text, double max_rate) {
+  YawOptions options;
+  options.max_rate = max_rate;
+  const std::string fixed = "fixed:";
+  if (text.rfind(fixed, 0) == 0) {
+    const std::string number = text.substr(fixed.size());
+    char* end = nullptr;
+    const double value = std::strtod(number.c_str(), &end);
+    if (number.empty() || *end != '\0' || !std::isfinite(value)) {
+      throw std::invalid_argument("--yaw: expected fixed:RAD with a finite number of radians, got '" + text + "'");
+    }
+    options.mode = YawMode::kFixed;
+    options.fixed_yaw = value;
+  } else if (!FromString(text, &options.mode) || options.mode == YawMode::kFixed) {
+    throw std::invalid_argument("--yaw: expected fixed:RAD, velocity or goal, got '" + text + "'");
+  }
+  options.Validate();
+  return options;
+}
+
+int RunExport(const ExportArgs& args) {
+  const Trajectory trajectory = ReadTrajectoryJson(args.trajectory);
+  const YawOptions yaw = ParseYaw(args.yaw, args.max_yaw_rate);
+  if (!args.map.empty() && args.format != "rosbag") {
+    throw std::invalid_argument("--map: only the rosbag format draws the map (got --format " + args.format + ")");
+  }
+  if (args.format == "polynomial") {
+    PolynomialFitOptions fit;
+    fit.max_position_error = args.max_position_error;
+    fit.max_velocity_error = args.max_velocity_error;
+    WriteTextFile(args.output, ExportPolynomialJson(trajectory, fit, yaw));
+    return kExitOk;
+  }
+  trajectory.CheckSampleRate(args.rate);
+  const HeadedSamples samples = SampleWithYaw(trajectory, args.rate, yaw);
+  if (args.format == "csv") {
+    WriteTextFile(args.output, ExportCsv(samples));
+  } else if (args.format == "px4") {
+    WriteTextFile(args.output, ExportPx4Csv(samples));
+  } else {
+    std::optional<OccupancyMap> map;
+    if (!args.map.empty()) map = OccupancyMap::Load(args.map);
+    WriteRosbag(RosbagContentJson(samples, map ? &*map : nullptr, args.voxel_radius), args.output);
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void RegisterExportCommand(CLI::App& app, Runner& run) {
+  auto args = std::make_shared<ExportArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "export", "Export a trajectory file (--trajectory of plan, temporal, waypoints) as CSV, polynomial segments, "
+                "PX4 setpoints (NED) or a ROS 1 bag");
+  sub->add_option("trajectory", args->trajectory, "Trajectory JSON")->required();
+  sub->add_option("--format", args->format, "csv (ENU samples with yaw), polynomial (JSON segments), px4 (NED "
+                                            "TrajectorySetpoint rows), rosbag (nav_msgs/Path, MultiDOFJointTrajectory, markers)")
+      ->required()
+      ->check(CLI::IsMember({"csv", "polynomial", "px4", "rosbag"}));
+  sub->add_option("-o,--output", args->output, "Output file")->required();
+  sub->add_option("--rate", args->rate, "Sample rate of csv, px4 and rosbag, Hz")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--yaw", args->yaw, "Heading: fixed:RAD (ENU, from +x counter-clockwise), velocity (along the horizontal "
+                                      "velocity) or goal (toward the end)")
+      ->capture_default_str();
+  sub->add_option("--max-yaw-rate", args->max_yaw_rate, "Largest yaw rate, rad/s")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--map", args->map, "rosbag: draw the occupied voxels of this OctoMap near the path");
+  sub->add_option("--voxel-radius", args->voxel_radius, "rosbag with --map: voxels within this distance of the path, m")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sub->add_option("--max-position-error", args->max_position_error, "polynomial: largest position error, m")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--max-velocity-error", args->max_velocity_error, "polynomial: largest velocity error, m/s")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->callback([args, &run] { run = [args] { return RunExport(*args); }; });
+}
+
+}  // namespace timeopt::cli
