@@ -30,12 +30,14 @@
 #include "timeopt/conic/problem.h"
 #include "timeopt/conic/solver.h"
 #include "timeopt/core/errors.h"
+#include "timeopt/core/files.h"
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/curve/piecewise_curve.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/planner_io.h"
 #include "timeopt/io/sim_io.h"
 #include "timeopt/io/temporal_io.h"
+#include "timeopt/io/trajectory_io.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/planner/planner.h"
@@ -711,7 +713,25 @@ PYBIND11_MODULE(timeopt, m) {
             for (const TrajectoryState& state : s) times.push_back(state.t);
             return py::make_tuple(ToArray(times), Sample(t, ToArray(times)));
           },
-          py::arg("rate_hz"), "(ts, (p, v, a, j)) at rate_hz from 0, with the end.");
+          py::arg("rate_hz"), "(ts, (p, v, a, j)) at rate_hz from 0, with the end.")
+      .def_static("load", &ReadTrajectoryJson, py::arg("path"),
+                  "Reads a trajectory file (--trajectory of plan, temporal, waypoints; docs/formats.md).")
+      .def("save", [](const Trajectory& t, const std::string& path) { WriteTrajectoryJson(t, path); }, py::arg("path"),
+           "Writes the trajectory file: curve and profile, exact; load() gives back the same samples to the bit.")
+      .def("to_json", [](const Trajectory& t) { return TrajectoryToJson(t); }, "The trajectory file's JSON text.")
+      .def_static("from_json", [](const std::string& text) { return ParseTrajectoryJson(text); }, py::arg("text"))
+      .def(
+          "yaw",
+          [](const Trajectory& t, const py::handle& ts, const std::string& yaw, double max_yaw_rate) {
+            const auto times = AsDoubles(ts, "ts");
+            if (times.ndim() != 1) throw py::value_error("ts: expected a 1-D array of times, got shape " + ShapeText(times));
+            const std::vector<double> grid(times.data(), times.data() + times.shape(0));
+            const YawProfile profile = PlanYaw(t, grid, ParseYawSpec(yaw, max_yaw_rate));
+            return py::make_tuple(ToArray(profile.yaw), ToArray(profile.rate));
+          },
+          py::arg("ts"), py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate,
+          "(yaw, yaw_rate) at the increasing times ts (ENU, rad and rad/s): 'fixed:RAD', 'velocity' or 'goal', "
+          "continuous, within max_yaw_rate, linear between the times.");
 
   // ---- maps ----
   py::class_<OccupancyMap>(m, "OccupancyMap", "An OctoMap occupancy map (.bt or .ot).")
@@ -739,6 +759,36 @@ PYBIND11_MODULE(timeopt, m) {
             return out;
           },
           py::arg("points"));
+
+  // ---- exports ----
+  m.def(
+      "export",
+      [](const Trajectory& trajectory, const std::string& format, const std::string& path, double rate,
+         const std::string& yaw, double max_yaw_rate, const OccupancyMap* map, double voxel_radius,
+         double max_position_error, double max_velocity_error) {
+        const YawOptions heading = ParseYawSpec(yaw, max_yaw_rate);
+        if (map != nullptr && format != "rosbag") throw py::value_error("export: only the rosbag format draws a map");
+        if (format == "polynomial") {
+          PolynomialFitOptions fit;
+          fit.max_position_error = max_position_error;
+          fit.max_velocity_error = max_velocity_error;
+          WriteTextFile(path, ExportPolynomialJson(trajectory, fit, heading));
+          return;
+        }
+        if (format != "csv" && format != "px4" && format != "rosbag") {
+          throw py::value_error("export: format must be csv, polynomial, px4 or rosbag, got '" + format + "'");
+        }
+        trajectory.CheckSampleRate(rate);
+        const HeadedSamples samples = SampleWithYaw(trajectory, rate, heading);
+        if (format == "csv") WriteTextFile(path, ExportCsv(samples));
+        else if (format == "px4") WriteTextFile(path, ExportPx4Csv(samples));
+        else WriteRosbag(RosbagContentJson(samples, map, voxel_radius), path);
+      },
+      py::arg("trajectory"), py::arg("format"), py::arg("path"), py::arg("rate") = kDefaultSampleRateHz,
+      py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate, py::arg("map") = nullptr,
+      py::arg("voxel_radius") = 1.0, py::arg("max_position_error") = PolynomialFitOptions().max_position_error,
+      py::arg("max_velocity_error") = PolynomialFitOptions().max_velocity_error,
+      "Writes the trajectory as `timeopt export` does: format csv, polynomial, px4 or rosbag (docs/formats.md).");
 
   py::class_<Esdf>(m, "Esdf", "A Euclidean signed distance field (metres; negative inside obstacles) with gradients.")
       .def_static(

@@ -27,6 +27,8 @@ MAIN_PACKAGES=(
   libcli11-dev                      # find_package(CLI11): the command line
   libcairo2-dev                     # pkg_check_modules(cairo): PNG plots
   fonts-dejavu-core                 # a font for the plots' text (a minimal root may have none)
+  python3-rosbag python3-nav-msgs   # `timeopt export --format rosbag` (python/timeopt_rosbag.py)
+  python3-trajectory-msgs python3-visualization-msgs
 )
 # Tests, benchmarks and experiments (TIMEOPT_BUILD_TESTS / _BENCHMARKS / _EXPERIMENTS).
 TEST_PACKAGES=(

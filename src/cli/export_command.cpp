@@ -31,30 +31,9 @@ struct ExportArgs {
   double max_velocity_error = PolynomialFitOptions().max_velocity_error;
 };
 
-// "fixed:RAD", "velocity" or "goal".
-YawOptions ParseYaw(const std::string& text, double max_rate) {
-  YawOptions options;
-  options.max_rate = max_rate;
-  const std::string fixed = "fixed:";
-  if (text.rfind(fixed, 0) == 0) {
-    const std::string number = text.substr(fixed.size());
-    char* end = nullptr;
-    const double value = std::strtod(number.c_str(), &end);
-    if (number.empty() || *end != '\0' || !std::isfinite(value)) {
-      throw std::invalid_argument("--yaw: expected fixed:RAD with a finite number of radians, got '" + text + "'");
-    }
-    options.mode = YawMode::kFixed;
-    options.fixed_yaw = value;
-  } else if (!FromString(text, &options.mode) || options.mode == YawMode::kFixed) {
-    throw std::invalid_argument("--yaw: expected fixed:RAD, velocity or goal, got '" + text + "'");
-  }
-  options.Validate();
-  return options;
-}
-
 int RunExport(const ExportArgs& args) {
   const Trajectory trajectory = ReadTrajectoryJson(args.trajectory);
-  const YawOptions yaw = ParseYaw(args.yaw, args.max_yaw_rate);
+  const YawOptions yaw = ParseYawSpec(args.yaw, args.max_yaw_rate);
   if (!args.map.empty() && args.format != "rosbag") {
     throw std::invalid_argument("--map: only the rosbag format draws the map (got --format " + args.format + ")");
   }

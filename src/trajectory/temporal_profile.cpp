@@ -257,8 +257,16 @@ TemporalProfile TemporalProfile::TimeScaled(double factor) const {
   for (std::vector<double>& piece : scaled.half_b_) {
     for (double& b : piece) b *= b_factor;
   }
-  for (double& t : scaled.cell_start_) t *= factor;
-  return scaled;
+  // Rebuilt by its constructor from the scaled values, so that a profile equals the one its values
+  // make (a trajectory file read back samples to the bit what was written); the times multiplied
+  // instead only if the scaled values make no profile (underflow at an extreme factor).
+  try {
+    if (jerk_limited()) return JerkLimited(scaled.half_b_, shapes_, edges_);
+    return TemporalProfile(scaled.b_);
+  } catch (const std::invalid_argument&) {
+    for (double& t : scaled.cell_start_) t *= factor;
+    return scaled;
+  }
 }
 
 double TemporalProfile::RestAlpha(double b_mid, double b_far) {

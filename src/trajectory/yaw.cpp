@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <stdexcept>
 
@@ -25,6 +26,26 @@ void YawOptions::Validate() const {
   if (!(max_rate > 0.0) || !std::isfinite(max_rate)) {
     throw std::invalid_argument("yaw: max_rate must be a positive finite number of rad/s");
   }
+}
+
+YawOptions ParseYawSpec(const std::string& spec, double max_rate) {
+  YawOptions options;
+  options.max_rate = max_rate;
+  const std::string fixed = "fixed:";
+  if (spec.rfind(fixed, 0) == 0) {
+    const std::string number = spec.substr(fixed.size());
+    char* end = nullptr;
+    const double value = std::strtod(number.c_str(), &end);
+    if (number.empty() || *end != '\0' || !std::isfinite(value)) {
+      throw std::invalid_argument("yaw: expected fixed:RAD with a finite number of radians, got '" + spec + "'");
+    }
+    options.mode = YawMode::kFixed;
+    options.fixed_yaw = value;
+  } else if (!FromString(spec, &options.mode) || options.mode == YawMode::kFixed) {
+    throw std::invalid_argument("yaw: expected fixed:RAD, velocity or goal, got '" + spec + "'");
+  }
+  options.Validate();
+  return options;
 }
 
 namespace {

@@ -384,3 +384,33 @@ def test_one_solver_shared_by_threads_gives_the_sequential_answers(solver):
         t.join()
     # Another process or buffer alignment may change the last bits with Ipopt (see above).
     assert got == pytest.approx([expected[k % len(problems)] for k in range(len(got))], rel=1e-12)
+
+
+def test_trajectory_file_and_exports_match_the_command_line(tmp_path):
+    # The waypoints command writes trajectory.json; Python reads it back and gives the same samples
+    # to the bit as its samples.csv (the file is exact), saves it again byte for byte, and its
+    # exports are the command's own files, byte for byte.
+    out = tmp_path / "wp"
+    subprocess.run([CLI, "waypoints", os.path.join(SOURCE, "examples", "waypoints.csv"), "--out-dir", str(out), "-q"],
+                   check=True, capture_output=True, cwd=SOURCE)
+    trajectory = timeopt.Trajectory.load(str(out / "trajectory.json"))
+    samples = np.loadtxt(out / "samples.csv", delimiter=",", skiprows=1)
+    ts, (p, v, a, j) = trajectory.sample_rate(100.0)
+    assert np.array_equal(ts, samples[:, 0])
+    assert np.array_equal(p, samples[:, 1:4]) and np.array_equal(v, samples[:, 4:7])
+    trajectory.save(str(tmp_path / "again.json"))
+    assert (tmp_path / "again.json").read_text() == (out / "trajectory.json").read_text()
+    for fmt in ("csv", "px4", "polynomial"):
+        mine, theirs = tmp_path / ("py." + fmt), tmp_path / ("cli." + fmt)
+        timeopt.export(trajectory, fmt, str(mine), yaw="goal", max_yaw_rate=0.5)
+        subprocess.run([CLI, "export", str(out / "trajectory.json"), "--format", fmt, "-o", str(theirs),
+                        "--yaw", "goal", "--max-yaw-rate", "0.5"], check=True)
+        assert mine.read_bytes() == theirs.read_bytes(), fmt
+    # The heading: rate-limited, its rate the finite difference of the yaw.
+    yaw, rate = trajectory.yaw(ts, yaw="velocity", max_yaw_rate=0.5)
+    assert np.all(np.abs(rate) <= 0.5)
+    assert np.allclose(np.diff(yaw) / np.diff(ts), rate[:-1], atol=1e-6)
+    with pytest.raises(ValueError, match="yaw"):
+        trajectory.yaw(ts, yaw="north")
+    with pytest.raises(ValueError, match="format"):
+        timeopt.export(trajectory, "kml", str(tmp_path / "x"))

@@ -77,8 +77,9 @@ class TemporalProfile {
                                      std::vector<std::vector<double>> cell_edges = {});
 
   // The same motion along the path, `factor` times slower (factor > 0 and finite; below 1:
-  // faster): every b divided by factor^2, every time multiplied by factor, the shapes and cells
-  // unchanged. Throws std::invalid_argument for another factor.
+  // faster): every b divided by factor^2, the shapes and cells unchanged, and the times those of
+  // the scaled values (the original's times factor to rounding). Throws std::invalid_argument for
+  // another factor.
   TemporalProfile TimeScaled(double factor) const;
 
   int num_pieces() const { return static_cast<int>(b_.size()); }

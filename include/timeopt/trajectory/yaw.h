@@ -47,6 +47,10 @@ struct YawOptions {
   void Validate() const;
 };
 
+// The options a heading spec names: "fixed:RAD", "velocity" or "goal", with max_rate (the
+// command line's --yaw and Python's yaw=). Throws std::invalid_argument naming the spec.
+YawOptions ParseYawSpec(const std::string& spec, double max_rate);
+
 // Below this share of its largest horizontal speed, a kVelocity heading is held.
 inline constexpr double kHoverSpeedShare = 0.01;
 // Within this share of the path's horizontal extent from the goal, a kGoal heading is held.
