@@ -29,6 +29,7 @@
 #include "timeopt/version.h"
 #include "timeopt/conic/problem.h"
 #include "timeopt/conic/solver.h"
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/errors.h"
 #include "timeopt/core/files.h"
 #include "timeopt/curve/interpolation.h"
@@ -766,23 +767,18 @@ PYBIND11_MODULE(timeopt, m) {
       [](const Trajectory& trajectory, const std::string& format, const std::string& path, double rate,
          const std::string& yaw, double max_yaw_rate, const OccupancyMap* map, double voxel_radius,
          double max_position_error, double max_velocity_error) {
-        const YawOptions heading = ParseYawSpec(yaw, max_yaw_rate);
-        if (map != nullptr && format != "rosbag") throw py::value_error("export: only the rosbag format draws a map");
-        if (format == "polynomial") {
-          PolynomialFitOptions fit;
-          fit.max_position_error = max_position_error;
-          fit.max_velocity_error = max_velocity_error;
-          WriteTextFile(path, ExportPolynomialJson(trajectory, fit, heading));
-          return;
+        ExportFormat kind = ExportFormat::kCsv;
+        if (!FromString(format, &kind)) {
+          throw py::value_error("export: format must be " + EnumChoices(kExportFormats) + ", got '" + format + "'");
         }
-        if (format != "csv" && format != "px4" && format != "rosbag") {
-          throw py::value_error("export: format must be csv, polynomial, px4 or rosbag, got '" + format + "'");
-        }
-        trajectory.CheckSampleRate(rate);
-        const HeadedSamples samples = SampleWithYaw(trajectory, rate, heading);
-        if (format == "csv") WriteTextFile(path, ExportCsv(samples));
-        else if (format == "px4") WriteTextFile(path, ExportPx4Csv(samples));
-        else WriteRosbag(RosbagContentJson(samples, map, voxel_radius), path);
+        ExportOptions options;
+        options.rate_hz = rate;
+        options.yaw = ParseYawSpec(yaw, max_yaw_rate);
+        options.fit.max_position_error = max_position_error;
+        options.fit.max_velocity_error = max_velocity_error;
+        options.map = map;
+        options.voxel_radius = voxel_radius;
+        WriteExport(trajectory, kind, path, options);
       },
       py::arg("trajectory"), py::arg("format"), py::arg("path"), py::arg("rate") = kDefaultSampleRateHz,
       py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate, py::arg("map") = nullptr,

@@ -71,14 +71,18 @@ def main(argv):
         point.time_from_start = genpy.Duration.from_sec(t)
         trajectory.points.append(point)
 
+    def marker(marker_id, kind):
+        m = Marker()
+        m.header.frame_id = frame
+        m.ns = "timeopt"
+        m.id = marker_id
+        m.type = kind
+        m.action = Marker.ADD
+        m.pose.orientation.w = 1.0
+        return m
+
     markers = MarkerArray()
-    line = Marker()
-    line.header.frame_id = frame
-    line.ns = "timeopt"
-    line.id = 0
-    line.type = Marker.LINE_STRIP
-    line.action = Marker.ADD
-    line.pose.orientation.w = 1.0
+    line = marker(0, Marker.LINE_STRIP)
     line.scale.x = 0.05
     line.color = ColorRGBA(r=1.0, g=1.0, b=1.0, a=1.0)
     for row in samples:
@@ -88,25 +92,13 @@ def main(argv):
         line.colors.append(ColorRGBA(r=share, g=0.2, b=1.0 - share, a=1.0))
     markers.markers.append(line)
     for marker_id, where, color in ((1, content["start"], (0.0, 0.8, 0.0)), (2, content["goal"], (0.9, 0.0, 0.0))):
-        sphere = Marker()
-        sphere.header.frame_id = frame
-        sphere.ns = "timeopt"
-        sphere.id = marker_id
-        sphere.type = Marker.SPHERE
-        sphere.action = Marker.ADD
+        sphere = marker(marker_id, Marker.SPHERE)
         sphere.pose.position = Point(x=where[0], y=where[1], z=where[2])
-        sphere.pose.orientation.w = 1.0
         sphere.scale = Vector3(x=0.3, y=0.3, z=0.3)
         sphere.color = ColorRGBA(r=color[0], g=color[1], b=color[2], a=1.0)
         markers.markers.append(sphere)
     if "voxels" in content:
-        cubes = Marker()
-        cubes.header.frame_id = frame
-        cubes.ns = "timeopt"
-        cubes.id = 3
-        cubes.type = Marker.CUBE_LIST
-        cubes.action = Marker.ADD
-        cubes.pose.orientation.w = 1.0
+        cubes = marker(3, Marker.CUBE_LIST)
         size = float(content["voxels"]["size"])
         cubes.scale = Vector3(x=size, y=size, z=size)
         cubes.color = ColorRGBA(r=0.5, g=0.5, b=0.5, a=0.6)

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands.h"
+#include "timeopt/core/enum_strings.h"
 #include "timeopt/core/files.h"
 #include "timeopt/io/trajectory_io.h"
 #include "timeopt/map/occupancy_map.h"
@@ -33,28 +34,23 @@ struct ExportArgs {
 
 int RunExport(const ExportArgs& args) {
   const Trajectory trajectory = ReadTrajectoryJson(args.trajectory);
-  const YawOptions yaw = ParseYawSpec(args.yaw, args.max_yaw_rate);
-  if (!args.map.empty() && args.format != "rosbag") {
-    throw std::invalid_argument("--map: only the rosbag format draws the map (got --format " + args.format + ")");
+  ExportFormat format = ExportFormat::kCsv;
+  if (!FromString(args.format, &format)) throw std::invalid_argument("--format: expected " + EnumChoices(kExportFormats));
+  ExportOptions options;
+  options.rate_hz = args.rate;
+  options.yaw = ParseYawSpec(args.yaw, args.max_yaw_rate);
+  options.fit.max_position_error = args.max_position_error;
+  options.fit.max_velocity_error = args.max_velocity_error;
+  options.voxel_radius = args.voxel_radius;
+  std::optional<OccupancyMap> map;
+  if (!args.map.empty()) {
+    if (format != ExportFormat::kRosbag) {
+      throw std::invalid_argument("--map: only the rosbag format draws the map (got --format " + args.format + ")");
+    }
+    map = OccupancyMap::Load(args.map);
+    options.map = &*map;
   }
-  if (args.format == "polynomial") {
-    PolynomialFitOptions fit;
-    fit.max_position_error = args.max_position_error;
-    fit.max_velocity_error = args.max_velocity_error;
-    WriteTextFile(args.output, ExportPolynomialJson(trajectory, fit, yaw));
-    return kExitOk;
-  }
-  trajectory.CheckSampleRate(args.rate);
-  const HeadedSamples samples = SampleWithYaw(trajectory, args.rate, yaw);
-  if (args.format == "csv") {
-    WriteTextFile(args.output, ExportCsv(samples));
-  } else if (args.format == "px4") {
-    WriteTextFile(args.output, ExportPx4Csv(samples));
-  } else {
-    std::optional<OccupancyMap> map;
-    if (!args.map.empty()) map = OccupancyMap::Load(args.map);
-    WriteRosbag(RosbagContentJson(samples, map ? &*map : nullptr, args.voxel_radius), args.output);
-  }
+  WriteExport(trajectory, format, args.output, options);
   return kExitOk;
 }
 
@@ -69,7 +65,7 @@ void RegisterExportCommand(CLI::App& app, Runner& run) {
   sub->add_option("--format", args->format, "csv (ENU samples with yaw), polynomial (JSON segments), px4 (NED "
                                             "TrajectorySetpoint rows), rosbag (nav_msgs/Path, MultiDOFJointTrajectory, markers)")
       ->required()
-      ->check(CLI::IsMember({"csv", "polynomial", "px4", "rosbag"}));
+      ->check(CLI::IsMember(EnumNames(kExportFormats)));
   sub->add_option("-o,--output", args->output, "Output file")->required();
   sub->add_option("--rate", args->rate, "Sample rate of csv, px4 and rosbag, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--yaw", args->yaw, "Heading: fixed:RAD (ENU, from +x counter-clockwise), velocity (along the horizontal "

@@ -234,6 +234,38 @@ std::string ExportPolynomialJson(const Trajectory& trajectory, const PolynomialF
   return j.dump(2) + "\n";
 }
 
+const char* ToString(ExportFormat format) {
+  switch (format) {
+    case ExportFormat::kCsv: return "csv";
+    case ExportFormat::kPolynomial: return "polynomial";
+    case ExportFormat::kPx4: return "px4";
+    case ExportFormat::kRosbag: return "rosbag";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& text, ExportFormat* format) { return EnumFromString(text, kExportFormats, format); }
+
+void WriteExport(const Trajectory& trajectory, ExportFormat format, const std::string& path,
+                 const ExportOptions& options) {
+  if (options.map != nullptr && format != ExportFormat::kRosbag) {
+    throw std::invalid_argument(std::string("export: only the rosbag format draws a map (format ") + ToString(format) + ")");
+  }
+  if (format == ExportFormat::kPolynomial) {
+    WriteTextFile(path, ExportPolynomialJson(trajectory, options.fit, options.yaw));
+    return;
+  }
+  trajectory.CheckSampleRate(options.rate_hz);
+  const HeadedSamples samples = SampleWithYaw(trajectory, options.rate_hz, options.yaw);
+  if (format == ExportFormat::kCsv) {
+    WriteTextFile(path, ExportCsv(samples));
+  } else if (format == ExportFormat::kPx4) {
+    WriteTextFile(path, ExportPx4Csv(samples));
+  } else {
+    WriteRosbag(RosbagContentJson(samples, options.map, options.voxel_radius), path);
+  }
+}
+
 std::string RosbagContentJson(const HeadedSamples& samples, const OccupancyMap* map, double voxel_radius) {
   if (samples.states.empty()) throw std::invalid_argument("rosbag: no samples");
   Json j;

@@ -20,6 +20,7 @@
 //
 // Errors: std::invalid_argument naming the field; timeopt::FileError for unreadable files.
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,24 @@ std::string ExportPolynomialJson(const Trajectory& trajectory, const PolynomialF
 // std::invalid_argument naming the radius).
 inline constexpr size_t kMaxMarkerVoxels = 1000000;
 std::string RosbagContentJson(const HeadedSamples& samples, const OccupancyMap* map, double voxel_radius);
+
+// The export formats, and one export written to a file with its options (the command line's
+// `timeopt export` and Python's timeopt.export).
+enum class ExportFormat { kCsv, kPolynomial, kPx4, kRosbag };
+inline constexpr std::array<ExportFormat, 4> kExportFormats = {ExportFormat::kCsv, ExportFormat::kPolynomial,
+                                                               ExportFormat::kPx4, ExportFormat::kRosbag};
+const char* ToString(ExportFormat format);
+bool FromString(const std::string& text, ExportFormat* format);
+
+struct ExportOptions {
+  double rate_hz = kDefaultSampleRateHz;  // csv, px4, rosbag
+  YawOptions yaw;
+  PolynomialFitOptions fit;              // polynomial
+  const OccupancyMap* map = nullptr;     // rosbag only (std::invalid_argument for another format)
+  double voxel_radius = 1.0;             // m, rosbag with a map
+};
+void WriteExport(const Trajectory& trajectory, ExportFormat format, const std::string& path,
+                 const ExportOptions& options);
 
 // Writes `content` (RosbagContentJson) as a ROS 1 bag at bag_path: Debian's /usr/bin/python3 runs
 // the writer timeopt_rosbag.py (with python3-rosbag and the message packages), found at
