@@ -183,7 +183,8 @@ class PlanResult:
 
 def export(trajectory: Trajectory, format: str, path: str, rate: float = 100.0, yaw: str = "velocity",
            max_yaw_rate: float = 1.0, map: Optional[OccupancyMap] = None, voxel_radius: float = 1.0,
-           max_position_error: float = 1e-3, max_velocity_error: float = 1e-2) -> None: ...
+           max_position_error: float = 1e-3, max_velocity_error: float = 1e-2,
+           max_acceleration_error: float = 2e-2) -> None: ...
 def plan(map: Union[Esdf, OccupancyMap, str], start: ArrayLike, goal: ArrayLike, **options: Any) -> PlanResult: ...
 
 class FlightReport:

@@ -766,7 +766,7 @@ PYBIND11_MODULE(timeopt, m) {
       "export",
       [](const Trajectory& trajectory, const std::string& format, const std::string& path, double rate,
          const std::string& yaw, double max_yaw_rate, const OccupancyMap* map, double voxel_radius,
-         double max_position_error, double max_velocity_error) {
+         double max_position_error, double max_velocity_error, double max_acceleration_error) {
         ExportFormat kind = ExportFormat::kCsv;
         if (!FromString(format, &kind)) {
           throw py::value_error("export: format must be " + EnumChoices(kExportFormats) + ", got '" + format + "'");
@@ -776,6 +776,7 @@ PYBIND11_MODULE(timeopt, m) {
         options.yaw = ParseYawSpec(yaw, max_yaw_rate);
         options.fit.max_position_error = max_position_error;
         options.fit.max_velocity_error = max_velocity_error;
+        options.fit.max_acceleration_error = max_acceleration_error;
         options.map = map;
         options.voxel_radius = voxel_radius;
         WriteExport(trajectory, kind, path, options);
@@ -784,6 +785,7 @@ PYBIND11_MODULE(timeopt, m) {
       py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate, py::arg("map") = nullptr,
       py::arg("voxel_radius") = 1.0, py::arg("max_position_error") = PolynomialFitOptions().max_position_error,
       py::arg("max_velocity_error") = PolynomialFitOptions().max_velocity_error,
+      py::arg("max_acceleration_error") = PolynomialFitOptions().max_acceleration_error,
       "Writes the trajectory as `timeopt export` does: format csv, polynomial, px4 or rosbag (docs/formats.md).");
 
   py::class_<Esdf>(m, "Esdf", "A Euclidean signed distance field (metres; negative inside obstacles) with gradients.")

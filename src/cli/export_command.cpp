@@ -30,6 +30,7 @@ struct ExportArgs {
   double voxel_radius = 1.0;
   double max_position_error = PolynomialFitOptions().max_position_error;
   double max_velocity_error = PolynomialFitOptions().max_velocity_error;
+  double max_acceleration_error = PolynomialFitOptions().max_acceleration_error;
 };
 
 int RunExport(const ExportArgs& args) {
@@ -41,6 +42,7 @@ int RunExport(const ExportArgs& args) {
   options.yaw = ParseYawSpec(args.yaw, args.max_yaw_rate);
   options.fit.max_position_error = args.max_position_error;
   options.fit.max_velocity_error = args.max_velocity_error;
+  options.fit.max_acceleration_error = args.max_acceleration_error;
   options.voxel_radius = args.voxel_radius;
   std::optional<OccupancyMap> map;
   if (!args.map.empty()) {
@@ -80,6 +82,9 @@ void RegisterExportCommand(CLI::App& app, Runner& run) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->add_option("--max-velocity-error", args->max_velocity_error, "polynomial: largest velocity error, m/s")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--max-acceleration-error", args->max_acceleration_error, "polynomial: largest acceleration error, m/s^2")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->callback([args, &run] { run = [args] { return RunExport(*args); }; });

@@ -228,8 +228,11 @@ std::string ExportPolynomialJson(const Trajectory& trajectory, const PolynomialF
   j["segments"] = list;
   j["max_error"] = {{"position", segments.max_position_error},
                     {"velocity", segments.max_velocity_error},
+                    {"acceleration", segments.max_acceleration_error},
                     {"check_spacing", segments.largest_checked_gap}};
-  j["tolerance"] = {{"position", fit.max_position_error}, {"velocity", fit.max_velocity_error}};
+  j["tolerance"] = {{"position", fit.max_position_error},
+                    {"velocity", fit.max_velocity_error},
+                    {"acceleration", fit.max_acceleration_error}};
   j["yaw"] = {{"mode", ToString(yaw.mode)}, {"max_rate", yaw.max_rate}};
   return j.dump(2) + "\n";
 }

@@ -20,7 +20,9 @@ void PolynomialFitOptions::Validate() const {
   };
   positive(max_position_error, "max_position_error");
   positive(max_velocity_error, "max_velocity_error");
+  positive(max_acceleration_error, "max_acceleration_error");
   positive(check_rate_hz, "check_rate_hz");
+  if (!(max_comparisons >= 1.0)) throw std::invalid_argument("polynomial segments: max_comparisons must be at least 1");
   if (max_segments < 1) throw std::invalid_argument("polynomial segments: max_segments must be at least 1");
 }
 
@@ -183,7 +185,7 @@ Eigen::Vector3d SegmentBound(const Coefficients& c, double h, int order) {
 
 struct Checked {
   bool ok = false;
-  double position = 0.0, velocity = 0.0, gap = 0.0;
+  double position = 0.0, velocity = 0.0, acceleration = 0.0, gap = 0.0;
 };
 
 class Fitter {
@@ -193,28 +195,72 @@ class Fitter {
 
   PolynomialSegments Run() {
     const int m = profile_.num_pieces(), K = profile_.cells_per_piece();
-    for (int i = 0; i < m; ++i) {
-      for (int k = 0; k < K; ++k) {
-        const double t0 = profile_.TimeAt(i, k);
-        const double t1 = k + 1 < K ? profile_.TimeAt(i, k + 1) : (i + 1 < m ? profile_.TimeAt(i + 1, 0) : profile_.total_time());
-        if (!(t1 > t0)) continue;
-        const CellBounds bounds = BoundCell(trajectory_, i, k);
-        const TrajectoryState x0 = trajectory_.AtPoint(profile_.InCell(i, k, 0.0), t0);
-        const TrajectoryState x1 = trajectory_.AtPoint(profile_.InCell(i, k, profile_.CellLength(i, k)), t1);
-        if (profile_.shape(i, k) == CellShape::kLinear) {
-          const double v = std::sqrt(profile_.b(i, k)), a = profile_.a(i, k);
-          PolynomialSegment segment;
-          segment.start = t0;
-          segment.duration = t1 - t0;
-          segment.coefficients = Compose(trajectory_.curve().piece(i), profile_.CellStart(i, k), v, a);
-          segment.exact = true;
-          const Checked checked = Check(segment, bounds);
-          if (checked.ok) {
-            Accept(std::move(segment), checked);
-            continue;
-          }
+    const int cells = m * K;
+    const auto start_of = [&](int c) { return profile_.TimeAt(c / K, c % K); };
+    const auto end_of = [&](int c) { return c + 1 < cells ? start_of(c + 1) : profile_.total_time(); };
+    std::vector<CellBounds> bounds(static_cast<size_t>(cells));
+    for (int c = 0; c < cells; ++c) bounds[static_cast<size_t>(c)] = BoundCell(trajectory_, c / K, c % K);
+    // The state at the start of cell c (its own right limit) and at the end of cell c (its left one).
+    const auto first_state = [&](int c) { return trajectory_.AtPoint(profile_.InCell(c / K, c % K, 0.0), start_of(c)); };
+    const auto last_state = [&](int c) {
+      return trajectory_.AtPoint(profile_.InCell(c / K, c % K, profile_.CellLength(c / K, c % K)), end_of(c));
+    };
+    for (int c = 0; c < cells;) {
+      const int i = c / K, k = c % K;
+      if (!(end_of(c) > start_of(c))) {
+        ++c;
+        continue;
+      }
+      if (profile_.shape(i, k) == CellShape::kLinear) {
+        const double v = std::sqrt(profile_.b(i, k)), a = profile_.a(i, k);
+        PolynomialSegment segment;
+        segment.start = start_of(c);
+        segment.duration = end_of(c) - segment.start;
+        segment.coefficients = Compose(trajectory_.curve().piece(i), profile_.CellStart(i, k), v, a);
+        segment.exact = true;
+        const Checked checked = Check(segment, bounds[static_cast<size_t>(c)], first_state(c), last_state(c));
+        if (checked.ok) {
+          Accept(std::move(segment), checked);
+          ++c;
+          continue;
         }
-        Fit(x0, x1, bounds, 0);
+        Fit(first_state(c), last_state(c), bounds[static_cast<size_t>(c)], 0);
+        ++c;
+        continue;
+      }
+      // Cells that are not polynomial in time: one fit over as many consecutive such cells as
+      // meet the tolerances (spans doubled from one cell while they do), so that the segments are
+      // few; a single cell that does not is halved in time (Fit).
+      const TrajectoryState x0 = first_state(c);
+      int run = 1;
+      while (c + run < cells && profile_.shape((c + run) / K, (c + run) % K) != CellShape::kLinear) ++run;
+      int best = 0;
+      PolynomialSegment best_segment;
+      Checked best_checked;
+      CellBounds span_bounds = bounds[static_cast<size_t>(c)];
+      int covered = 1;
+      for (int span = 1; span <= run; span *= 2) {
+        for (; covered < span; ++covered) {
+          span_bounds.acceleration = span_bounds.acceleration.cwiseMax(bounds[static_cast<size_t>(c + covered)].acceleration);
+          span_bounds.jerk = span_bounds.jerk.cwiseMax(bounds[static_cast<size_t>(c + covered)].jerk);
+        }
+        const TrajectoryState x1 = last_state(c + span - 1);
+        PolynomialSegment segment;
+        segment.start = x0.t;
+        segment.duration = x1.t - x0.t;
+        segment.coefficients = Hermite7(x0, x1, segment.duration);
+        const Checked checked = Check(segment, span_bounds, x0, x1);
+        if (!checked.ok) break;
+        best = span;
+        best_segment = std::move(segment);
+        best_checked = checked;
+      }
+      if (best == 0) {
+        Fit(x0, last_state(c), bounds[static_cast<size_t>(c)], 0);
+        ++c;
+      } else {
+        Accept(std::move(best_segment), best_checked);
+        c += best;
       }
     }
     return std::move(out_);
@@ -229,6 +275,7 @@ class Fitter {
     out_.degree = std::max(out_.degree, static_cast<int>(segment.coefficients.cols()) - 1);
     out_.max_position_error = std::max(out_.max_position_error, checked.position);
     out_.max_velocity_error = std::max(out_.max_velocity_error, checked.velocity);
+    out_.max_acceleration_error = std::max(out_.max_acceleration_error, checked.acceleration);
     out_.largest_checked_gap = std::max(out_.largest_checked_gap, checked.gap);
     out_.segments.push_back(std::move(segment));
   }
@@ -239,7 +286,7 @@ class Fitter {
     segment.start = x0.t;
     segment.duration = x1.t - x0.t;
     segment.coefficients = Hermite7(x0, x1, segment.duration);
-    const Checked checked = Check(segment, bounds);
+    const Checked checked = Check(segment, bounds, x0, x1);
     if (checked.ok) {
       Accept(std::move(segment), checked);
       return;
@@ -248,8 +295,10 @@ class Fitter {
     if (depth >= kMaxDepth || !(segment.duration > 1e-9 * profile_.total_time()) || !(middle > x0.t && middle < x1.t)) {
       std::ostringstream message;
       message << "polynomial segments: the tolerances (" << options_.max_position_error << " m, "
-              << options_.max_velocity_error << " m/s) cannot be met at t = " << x0.t << " s (error bounds "
-              << checked.position << " m, " << checked.velocity << " m/s on a segment of " << segment.duration << " s)";
+              << options_.max_velocity_error << " m/s, " << options_.max_acceleration_error
+              << " m/s^2) cannot be met at t = " << x0.t << " s (error bounds " << checked.position << " m, "
+              << checked.velocity << " m/s, " << checked.acceleration << " m/s^2 on a segment of " << segment.duration
+              << " s)";
       throw std::invalid_argument(message.str());
     }
     const TrajectoryState xm = trajectory_.Evaluate(middle);
@@ -258,41 +307,60 @@ class Fitter {
   }
 
   // The segment's error bounds against the trajectory (see the header comment).
-  Checked Check(const PolynomialSegment& segment, const CellBounds& bounds) const {
+  // x0 and x1: the trajectory's states at the segment's ends, as its own cells give them (one-sided
+  // where the acceleration steps between cells).
+  Checked Check(const PolynomialSegment& segment, const CellBounds& bounds, const TrajectoryState& x0,
+                const TrajectoryState& x1) const {
     const double h = segment.duration;
     const Eigen::Vector3d s_position = SegmentBound(segment.coefficients, h, 2) + bounds.acceleration;
     const Eigen::Vector3d s_velocity = SegmentBound(segment.coefficients, h, 3) + bounds.jerk;
-    // Checks: the rate, at least kMinChecks, and a spacing whose h^2 / 8 term is small.
+    // Checks: the rate, at least kMinChecks, and a spacing whose slack terms are small: gap^2 / 8
+    // times the second derivative's bound for position and velocity, gap / 2 times the first
+    // derivative's for the acceleration (the trajectory's jerk may step, so no second order there).
     double count = std::max({static_cast<double>(kMinChecks), std::ceil(h * options_.check_rate_hz)});
     const auto spacing_for = [&](double curvature, double tolerance) {
       return curvature > 0.0 ? std::sqrt(8.0 * kCurvatureShare * tolerance / curvature) : h;
     };
-    const double finest = std::min(spacing_for(s_position.norm(), options_.max_position_error),
-                                   spacing_for(s_velocity.norm(), options_.max_velocity_error));
+    const double spacing_a = s_velocity.norm() > 0.0 ? 2.0 * kCurvatureShare * options_.max_acceleration_error / s_velocity.norm() : h;
+    const double finest = std::min({spacing_for(s_position.norm(), options_.max_position_error),
+                                    spacing_for(s_velocity.norm(), options_.max_velocity_error), spacing_a});
     count = std::max(count, std::ceil(h / finest));
     Checked out;
     if (!(count <= kMaxChecks)) {
-      out.position = out.velocity = std::numeric_limits<double>::infinity();
+      out.position = out.velocity = out.acceleration = std::numeric_limits<double>::infinity();
       return out;
     }
     const int n = static_cast<int>(count);
+    comparisons_ += n + 1;
+    if (comparisons_ > options_.max_comparisons) {
+      std::ostringstream message;
+      message << "polynomial segments: more than " << options_.max_comparisons
+              << " comparisons with the trajectory for these tolerances (" << options_.max_position_error << " m, "
+              << options_.max_velocity_error << " m/s, " << options_.max_acceleration_error << " m/s^2); loosen them";
+      throw std::invalid_argument(message.str());
+    }
     const double gap = h / n;
-    Eigen::Vector3d prev_p = Eigen::Vector3d::Zero(), prev_v = Eigen::Vector3d::Zero();
+    Eigen::Vector3d prev_p = Eigen::Vector3d::Zero(), prev_v = Eigen::Vector3d::Zero(), prev_a = Eigen::Vector3d::Zero();
     const Eigen::Vector3d slack_p = s_position * (gap * gap / 8.0), slack_v = s_velocity * (gap * gap / 8.0);
+    const Eigen::Vector3d slack_a = s_velocity * (gap / 2.0);
     for (int j = 0; j <= n; ++j) {
       const double tau = j == n ? h : j * gap;
-      const TrajectoryState x = trajectory_.Evaluate(segment.start + tau);
+      const TrajectoryState x = j == 0 ? x0 : j == n ? x1 : trajectory_.Evaluate(segment.start + tau);
       const Eigen::Vector3d e_p = (EvaluateSegment(segment, tau, 0) - x.position).cwiseAbs();
       const Eigen::Vector3d e_v = (EvaluateSegment(segment, tau, 1) - x.velocity).cwiseAbs();
+      const Eigen::Vector3d e_a = (EvaluateSegment(segment, tau, 2) - x.acceleration).cwiseAbs();
       if (j > 0) {
         out.position = std::max(out.position, (prev_p.cwiseMax(e_p) + slack_p).norm());
         out.velocity = std::max(out.velocity, (prev_v.cwiseMax(e_v) + slack_v).norm());
+        out.acceleration = std::max(out.acceleration, (prev_a.cwiseMax(e_a) + slack_a).norm());
       }
       prev_p = e_p;
       prev_v = e_v;
+      prev_a = e_a;
     }
     out.gap = gap;
-    out.ok = out.position <= options_.max_position_error && out.velocity <= options_.max_velocity_error;
+    out.ok = out.position <= options_.max_position_error && out.velocity <= options_.max_velocity_error &&
+             out.acceleration <= options_.max_acceleration_error;
     return out;
   }
 
@@ -300,6 +368,7 @@ class Fitter {
   const TemporalProfile& profile_;
   const PolynomialFitOptions& options_;
   PolynomialSegments out_;
+  mutable double comparisons_ = 0.0;
 };
 
 }  // namespace

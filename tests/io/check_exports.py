@@ -77,7 +77,7 @@ def main(cli, source):
             poly = json.load(f)
         segments = poly["segments"]
         check(poly["frame"] == "ENU", "polynomial frame")
-        worst_p = worst_v = 0.0
+        worst_p = worst_v = worst_a = 0.0
         index = 0
         for r in dense:
             t = r[0]
@@ -89,12 +89,16 @@ def main(cli, source):
                 c = s["coefficients"][axis]
                 p = sum(c[j] * tau ** j for j in range(len(c)))
                 v = sum(j * c[j] * tau ** (j - 1) for j in range(1, len(c)))
+                a = sum(j * (j - 1) * c[j] * tau ** (j - 2) for j in range(2, len(c)))
                 worst_p = max(worst_p, abs(p - r[1 + axis]))
                 worst_v = max(worst_v, abs(v - r[4 + axis]))
+                worst_a = max(worst_a, abs(a - r[7 + axis]))
         check(worst_p <= 1e-3, "polynomial position error %g m above 1 mm" % worst_p)
         check(worst_v <= 1e-2, "polynomial velocity error %g m/s above 1 cm/s" % worst_v)
-        check(worst_p <= poly["max_error"]["position"] and worst_v <= poly["max_error"]["velocity"],
-              "errors %g / %g above the stated bounds %s" % (worst_p, worst_v, poly["max_error"]))
+        check(worst_a <= 2e-2, "polynomial acceleration error %g m/s^2 above 0.02" % worst_a)
+        check(worst_p <= poly["max_error"]["position"] and worst_v <= poly["max_error"]["velocity"] and
+              worst_a <= poly["max_error"]["acceleration"],
+              "errors %g / %g / %g above the stated bounds %s" % (worst_p, worst_v, worst_a, poly["max_error"]))
         # The bag: standard types, one frame, times from 0, the samples' positions.
         bag = rosbag.Bag(out["rosbag"])
         info = bag.get_type_and_topic_info()
@@ -134,9 +138,10 @@ def main(cli, source):
     if failures:
         print("%d checks failed" % len(failures))
         return 1
-    print("every export read back: %d samples, %d segments (degree %d), bound %.3g m / %.3g m/s, measured %.3g / %.3g"
+    print("every export read back: %d samples, %d segments (degree %d), bounds %.3g m / %.3g m/s / %.3g m/s^2, "
+          "measured at 1 kHz %.3g / %.3g / %.3g"
           % (len(enu), len(segments), poly["degree"], poly["max_error"]["position"], poly["max_error"]["velocity"],
-             worst_p, worst_v))
+             poly["max_error"]["acceleration"], worst_p, worst_v, worst_a))
     return 0
 
 

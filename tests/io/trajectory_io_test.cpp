@@ -210,20 +210,23 @@ TEST(PolynomialSegments, WithinTheirBoundsOfTheTrajectoryAt1kHz) {
     const PolynomialSegments fit = FitPolynomialSegments(trajectory);
     EXPECT_LE(fit.max_position_error, 1e-3);
     EXPECT_LE(fit.max_velocity_error, 1e-2);
+    EXPECT_LE(fit.max_acceleration_error, 2e-2);
     EXPECT_EQ(fit.degree, jerk ? 7 : 10);  // 2 x 5 for a quintic composed with a quadratic s(t)
     ASSERT_FALSE(fit.segments.empty());
     EXPECT_EQ(fit.segments.front().start, 0.0);
     const PolynomialSegment& last = fit.segments.back();
     EXPECT_NEAR(last.start + last.duration, trajectory.duration(), 1e-12 * trajectory.duration());
     size_t segment = 0;
-    double worst_p = 0.0, worst_v = 0.0;
+    double worst_p = 0.0, worst_v = 0.0, worst_a = 0.0;
     for (double t = 0.0; t <= trajectory.duration(); t += 1e-3) {
       while (segment + 1 < fit.segments.size() && fit.segments[segment + 1].start <= t) ++segment;
       const PolynomialSegment& s = fit.segments[segment];
       const TrajectoryState x = trajectory.Evaluate(t);
       worst_p = std::max(worst_p, (EvaluateSegment(s, t - s.start, 0) - x.position).norm());
       worst_v = std::max(worst_v, (EvaluateSegment(s, t - s.start, 1) - x.velocity).norm());
+      worst_a = std::max(worst_a, (EvaluateSegment(s, t - s.start, 2) - x.acceleration).norm());
     }
+    EXPECT_LE(worst_a, fit.max_acceleration_error);
     EXPECT_LE(worst_p, fit.max_position_error);
     EXPECT_LE(worst_v, fit.max_velocity_error);
     if (!jerk) {
@@ -251,6 +254,7 @@ TEST(PolynomialSegments, TighterTolerancesSplitAndUnreachableOnesAreRefused) {
   PolynomialFitOptions loose, tight;
   tight.max_position_error = 1e-9;
   tight.max_velocity_error = 1e-8;
+  tight.max_acceleration_error = 1e-3;
   const PolynomialSegments a = FitPolynomialSegments(trajectory, loose), b = FitPolynomialSegments(trajectory, tight);
   EXPECT_GT(b.segments.size(), a.segments.size());
   EXPECT_LE(b.max_position_error, 1e-9);
@@ -262,6 +266,16 @@ TEST(PolynomialSegments, TighterTolerancesSplitAndUnreachableOnesAreRefused) {
     FAIL() << "expected std::invalid_argument";
   } catch (const std::invalid_argument& e) {
     EXPECT_THAT(e.what(), HasSubstr("cannot be met"));
+  }
+  // Tolerances that would need minutes of comparisons are refused by the work cap, not run.
+  PolynomialFitOptions slow;
+  slow.max_acceleration_error = 1e-7;
+  slow.max_comparisons = 1e5;  // (the default 2e7 takes seconds to reach)
+  try {
+    FitPolynomialSegments(trajectory, slow);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("comparisons"));
   }
   PolynomialFitOptions bad;
   bad.check_rate_hz = -1;
