@@ -41,6 +41,8 @@ SCHEMA_FILES = [
     "planner_config.schema.json",
     "plan.schema.json",
     "flight_report.schema.json",
+    "trajectory.schema.json",
+    "polynomial.schema.json",
 ]
 RUN_TIMEOUT_S = 240
 
@@ -198,6 +200,19 @@ def main(argv):
             report(isinstance(wp_result, dict) and "flight" in wp_result,
                    "waypoints result.json has a flight block", "no `flight` key")
             validate_file(schemas, at("wp/curve.json"), "curve.schema.json", "waypoints curve.json")
+            # The trajectory file (jerk-limited), its polynomial export, and one without a jerk limit.
+            trajectory = validate_file(schemas, at("wp/trajectory.json"), "trajectory.schema.json",
+                                       "waypoints trajectory.json")
+            if run(cli, ["export", at("wp/trajectory.json"), "--format", "polynomial", "-o", at("poly.json")], tmp,
+                   [0], "export --format polynomial"):
+                validate_file(schemas, at("poly.json"), "polynomial.schema.json", "export polynomial")
+            if isinstance(trajectory, dict):
+                both = copy.deepcopy(trajectory)
+                both["profile"]["b"] = [[1.0, 1.0]]
+                schemas.expect_invalid(both, "trajectory.schema.json", "a trajectory with both b and half_b")
+        if run(cli, ["temporal", line_problem, "-o", at("r2.json"), "--trajectory", at("line_t.json")], tmp, [0],
+               "temporal --trajectory"):
+            validate_file(schemas, at("line_t.json"), "trajectory.schema.json", "temporal --trajectory (linear cells)")
 
         # timeopt plan --print-config: the complete configuration.
         proc = run(cli, ["plan", "--print-config"], tmp, [0], "plan --print-config")
