@@ -39,6 +39,7 @@
 #include "timeopt/io/sim_io.h"
 #include "timeopt/io/temporal_io.h"
 #include "timeopt/io/trajectory_io.h"
+#include "timeopt/viz/plan_page.h"
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/planner/planner.h"
@@ -722,6 +723,27 @@ PYBIND11_MODULE(timeopt, m) {
       .def("to_json", [](const Trajectory& t) { return TrajectoryToJson(t); }, "The trajectory file's JSON text.")
       .def_static("from_json", [](const std::string& text) { return ParseTrajectoryJson(text); }, py::arg("text"))
       .def(
+          "to_html",
+          [](const Trajectory& t, const std::string& path, const VehicleLimits* limits, const OccupancyMap* map,
+             const std::string& title) {
+            VehicleLimits drawn;
+            if (limits != nullptr) {
+              drawn = *limits;
+            } else {
+              drawn.max_velocity.setConstant(std::numeric_limits<double>::infinity());
+              drawn.max_acceleration.setConstant(std::numeric_limits<double>::infinity());
+              drawn.max_jerk.reset();
+            }
+            PlanPageOptions page;
+            page.title = title;
+            page.summary = {{"T", std::to_string(t.duration()) + " s"},
+                            {"profile", t.profile().jerk_limited() ? "jerk-limited" : "without a jerk limit"}};
+            WritePlanPageHtml(t, drawn, map, path, page);
+          },
+          py::arg("path"), py::arg("limits") = nullptr, py::arg("map") = nullptr, py::arg("title") = "timeopt trajectory",
+          "Writes the 3D page (one HTML file; docs/formats.md): the path coloured by speed, map voxels near it, "
+          "playback and plots with the limits given.")
+      .def(
           "yaw",
           [](const Trajectory& t, const py::handle& ts, const std::string& yaw, double max_yaw_rate) {
             const auto times = AsDoubles(ts, "ts");
@@ -856,6 +878,25 @@ PYBIND11_MODULE(timeopt, m) {
           [](const PlanResult& r) { return py::module_::import("json").attr("loads")(PlanResultToJson(r)); },
           "The plan's summary as a dict (the plan's own keys of `timeopt plan`'s JSON).")
       .def("to_json", [](const PlanResult& r) { return PlanResultToJson(r); }, "The plan's summary as JSON text.")
+      .def(
+          "to_html",
+          [](const PlanResult& r, const std::string& path, const OccupancyMap* map, const VehicleLimits* limits) {
+            if (!r.is_success()) throw py::value_error(std::string("PlanResult.to_html: the plan is ") + ToString(r.status));
+            const VehicleLimits drawn = limits != nullptr ? *limits : PlannerOptions().limits;
+            PlanPageOptions page;
+            page.title = "timeopt plan";
+            std::ostringstream T, length, clearance;
+            T << r.temporal.total_time << " s";
+            length << r.path_length << " m";
+            clearance << r.min_clearance << " m";
+            page.summary = {{"T", T.str()}, {"status", ToString(r.status)}, {"path length", length.str()},
+                            {"clearance", clearance.str()},
+                            {"profile", r.temporal.profile.jerk_limited() ? "jerk-limited" : "without a jerk limit"}};
+            WritePlanPageHtml(Trajectory(r.curve, r.temporal.profile), drawn, map, path, page);
+          },
+          py::arg("path"), py::arg("map") = nullptr, py::arg("limits") = nullptr,
+          "Writes the 3D page of a successful plan (docs/formats.md): pass the map for its voxels and the limits "
+          "the plan was made with (default: the planner's defaults).")
       .def("__repr__", [](const PlanResult& r) {
         std::ostringstream s;
         s << "<PlanResult " << ToString(r.status);

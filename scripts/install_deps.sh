@@ -29,6 +29,7 @@ MAIN_PACKAGES=(
   fonts-dejavu-core                 # a font for the plots' text (a minimal root may have none)
   python3-rosbag python3-nav-msgs   # `timeopt export --format rosbag` (python/timeopt_rosbag.py)
   python3-trajectory-msgs python3-visualization-msgs
+  libjs-three libjs-chart.js        # the 3D page (plan --html, view), inlined when it is written
 )
 # Tests, benchmarks and experiments (TIMEOPT_BUILD_TESTS / _BENCHMARKS / _EXPERIMENTS).
 TEST_PACKAGES=(
@@ -39,6 +40,7 @@ TEST_PACKAGES=(
   pybind11-dev python3-dev          # the Python module (TIMEOPT_BUILD_PYTHON)
   python3-pytest python3-scipy      # tests/python (pytest; scipy.sparse for the conic solver)
   python3-jsonschema                # tests/io/validate_schemas.py (docs/schema against real outputs)
+  chromium                          # tests/viz/check_plan_page.py (the 3D page in headless Chromium)
 )
 
 # Fuzzing (scripts/fuzz.sh, TIMEOPT_BUILD_FUZZERS).

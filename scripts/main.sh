@@ -2,8 +2,9 @@
 # Installs missing Debian packages, builds timeopt in build/ and runs the main job on the shipped
 # defaults:
 #  1. `timeopt plan` with no arguments: plans on maps/forest_20x20.bt (A* front end, Ceres spatial
-#     optimization, certified minimum-time temporal stage) and writes results/plan.csv (100 Hz) and
-#     results/plan.png (the trajectory over a map slice, coloured by speed);
+#     optimization, certified minimum-time temporal stage) and writes results/plan.csv (100 Hz),
+#     results/plan.png (the trajectory over a map slice, coloured by speed) and results/plan.html
+#     (the plan in 3D);
 #  2. a minimum-jerk curve through examples/waypoints.csv timed by the SOCP, with the speed,
 #     velocity and acceleration plot against time (results/waypoints/profile.png).
 set -euo pipefail
@@ -19,4 +20,4 @@ mkdir -p results
 ./build/timeopt plan
 ./build/timeopt waypoints examples/waypoints.csv --kind minjerk --max-velocity 2 --max-jerk 10 \
   --max-acceleration 2 -K 50 --constraint-mode certified --out-dir results/waypoints
-echo "results: $(pwd)/results (plan.csv, plan.png, waypoints/)"
+echo "results: $(pwd)/results (plan.csv, plan.png, plan.html, waypoints/)"

@@ -125,5 +125,6 @@ void RegisterPlanCommand(CLI::App& app, Runner& run);
 void RegisterConicCommand(CLI::App& app, Runner& run);
 void RegisterSimulateCommand(CLI::App& app, Runner& run);
 void RegisterExportCommand(CLI::App& app, Runner& run);
+void RegisterViewCommand(CLI::App& app, Runner& run);
 
 }  // namespace timeopt::cli

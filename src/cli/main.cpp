@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   RegisterConicCommand(app, run);
   RegisterSimulateCommand(app, run);
   RegisterExportCommand(app, run);
+  RegisterViewCommand(app, run);
 
   try {
     app.parse(argc, argv);

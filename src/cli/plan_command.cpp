@@ -15,6 +15,8 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -28,6 +30,7 @@
 #include "timeopt/map/esdf.h"
 #include "timeopt/map/occupancy_map.h"
 #include "timeopt/sim/quadrotor_sim.h"
+#include "timeopt/viz/plan_page.h"
 #include "timeopt/viz/plan_plot.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/trajectory/trajectory.h"
@@ -44,9 +47,10 @@ constexpr const char* kDefaultStart = "1,1,1.5";
 constexpr const char* kDefaultGoal = "19,19,1.5";
 constexpr const char* kDefaultOutput = "results/plan.csv";
 constexpr const char* kDefaultPlot = "results/plan.png";
+constexpr const char* kDefaultHtml = "results/plan.html";
 
 struct PlanArgs {
-  std::string map, start, goal, config, output, plot, trajectory;
+  std::string map, start, goal, config, output, plot, trajectory, html;
   std::string start_velocity, start_acceleration;  // x,y,z: a start in motion (re-planning)
   bool print_config = false;
   bool verbose = false, quiet = false;
@@ -115,6 +119,45 @@ PlannerOptions OptionsFrom(const PlanArgs& args) {
   return options;
 }
 
+// The 3D page's summary lines from the plan's summary JSON.
+std::vector<std::pair<std::string, std::string>> PageSummary(const Json& summary, const Trajectory& trajectory) {
+  std::vector<std::pair<std::string, std::string>> lines;
+  const auto text = [](const Json& value) {
+    if (value.is_null()) return std::string("none");
+    if (value.is_string()) return value.get<std::string>();
+    std::ostringstream out;
+    if (value.is_array()) {
+      bool same = true;
+      for (const Json& v : value) same = same && v == value[0];
+      if (same && !value.empty()) {
+        out << value[0].get<double>();
+        return out.str();
+      }
+    }
+    out << value.dump();
+    return out.str();
+  };
+  std::ostringstream T;
+  T << std::setprecision(6) << trajectory.duration() << " s";
+  lines.emplace_back("T", T.str());
+  lines.emplace_back("status", text(summary["status"]));
+  const Json& limits = summary["limits"];
+  lines.emplace_back("limits", "v " + text(limits["max_velocity"]) + " m/s, a " + text(limits["max_acceleration"]) +
+                                   " m/s^2, j " + text(limits["max_jerk"]) + " m/s^3 (per axis)");
+  lines.emplace_back("mode", limits["max_jerk"].is_null() ? text(summary["constraint_mode"]) + " rows, no jerk limit"
+                                                          : std::string("jerk-limited"));
+  if (summary.contains("flight") && summary["flight"].contains("feasible")) {
+    const Json& f = summary["flight"];
+    std::ostringstream flight;
+    flight << (f["feasible"].get<bool>() ? "the limits hold" : "a limit is exceeded") << " (max |v|/vmax "
+           << std::setprecision(4) << f["max_velocity_ratio"].get<double>() << ", max |a|/amax "
+           << f["max_acceleration_ratio"].get<double>() << ")";
+    lines.emplace_back("flight", flight.str());
+  }
+  lines.emplace_back("map", text(summary["map"]));
+  return lines;
+}
+
 int RunPlan(PlanArgs args) {
   if (args.print_config) {
     // The complete configuration these flags give, as --config reads it; nothing is planned.
@@ -128,6 +171,7 @@ int RunPlan(PlanArgs args) {
     if (args.goal.empty()) args.goal = kDefaultGoal;
     if (args.output.empty()) args.output = kDefaultOutput;
     if (args.plot.empty()) args.plot = kDefaultPlot;
+    if (args.html.empty()) args.html = kDefaultHtml;
   }
   if (args.start.empty() || args.goal.empty()) {
     throw std::invalid_argument("--start and --goal are required with --map");
@@ -223,6 +267,14 @@ int RunPlan(PlanArgs args) {
       WritePlanPng(esdf, trajectory, args.plot);
       summary["plot"] = args.plot;
     }
+    if (!args.html.empty()) {
+      EnsureParentDirectory(args.html);
+      PlanPageOptions page;
+      page.title = "timeopt plan: " + args.start + " -> " + args.goal;
+      page.summary = PageSummary(summary, trajectory);
+      WritePlanPageHtml(trajectory, options.limits, &map, args.html, page);
+      summary["html"] = args.html;
+    }
   }
   if (!args.quiet) std::cout << summary.dump(2) << "\n";
   if (!ok) std::cerr << "timeopt: plan: " << ToString(plan.status) << ": " << plan.message << "\n";
@@ -289,6 +341,7 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");
   sub->add_option("--trajectory", args->trajectory, kTrajectoryOptionHelp);
+  sub->add_option("--html", args->html, "3D page: the plan over the map's voxels, with plots and playback (one HTML file)");
   sub->callback([args, &run] { run = [args] { return RunPlan(*args); }; });
 }
 

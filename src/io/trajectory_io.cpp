@@ -10,9 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <set>
 #include <stdexcept>
-#include <tuple>
 
 #include "json_internal.h"
 
@@ -289,40 +287,13 @@ std::string RosbagContentJson(const HeadedSamples& samples, const OccupancyMap* 
   j["start"] = {first.position.x(), first.position.y(), first.position.z()};
   j["goal"] = {last.position.x(), last.position.y(), last.position.z()};
   if (map != nullptr) {
-    if (!(voxel_radius >= 0.0) || !std::isfinite(voxel_radius)) {
-      throw std::invalid_argument("rosbag: the voxel radius must be a finite number of metres >= 0");
-    }
-    const double res = map->resolution();
-    const long reach = static_cast<long>(std::ceil(voxel_radius / res));
-    std::set<std::tuple<long, long, long>> seen;
+    std::vector<Eigen::Vector3d> path;
+    for (const TrajectoryState& s : samples.states) path.push_back(s.position);
     Json centers = Json::array();
-    Eigen::Vector3d kept = Eigen::Vector3d::Constant(INFINITY);
-    for (const TrajectoryState& s : samples.states) {
-      // Points of the path at most half a voxel or a quarter of the radius apart.
-      if ((s.position - kept).norm() < std::max(0.5 * res, 0.25 * voxel_radius) && &s != &samples.states.back()) continue;
-      kept = s.position;
-      const long cx = static_cast<long>(std::floor(s.position.x() / res));
-      const long cy = static_cast<long>(std::floor(s.position.y() / res));
-      const long cz = static_cast<long>(std::floor(s.position.z() / res));
-      for (long dx = -reach; dx <= reach; ++dx) {
-        for (long dy = -reach; dy <= reach; ++dy) {
-          for (long dz = -reach; dz <= reach; ++dz) {
-            const Eigen::Vector3d center((cx + dx + 0.5) * res, (cy + dy + 0.5) * res, (cz + dz + 0.5) * res);
-            if ((center - s.position).norm() > voxel_radius + 0.87 * res) continue;
-            if (!seen.emplace(cx + dx, cy + dy, cz + dz).second) continue;
-            if (seen.size() > kMaxMarkerVoxels * 20) {
-              throw std::invalid_argument("rosbag: more than 2e7 voxels within the voxel radius of the path (lower it)");
-            }
-            if (!map->IsOccupied(center)) continue;
-            centers.push_back({center.x(), center.y(), center.z()});
-            if (centers.size() > kMaxMarkerVoxels) {
-              throw std::invalid_argument("rosbag: more than 1e6 occupied voxels within the voxel radius of the path (lower it)");
-            }
-          }
-        }
-      }
+    for (const Eigen::Vector3d& c : OccupiedVoxelsNear(*map, path, voxel_radius, kMaxMarkerVoxels)) {
+      centers.push_back({c.x(), c.y(), c.z()});
     }
-    j["voxels"] = {{"size", res}, {"centers", centers}};
+    j["voxels"] = {{"size", map->resolution()}, {"centers", centers}};
   }
   return j.dump() + "\n";
 }

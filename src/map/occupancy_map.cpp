@@ -18,9 +18,12 @@
 #include <fstream>
 #include <iomanip>
 #include <iterator>
+#include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 #include "timeopt/core/enum_strings.h"
 #include "timeopt/core/errors.h"
@@ -531,6 +534,48 @@ void OccupancyMap::SetOccupied(const Eigen::Vector3d& point, bool occupied) {
     throw std::invalid_argument("point outside the OctoMap key range");
   }
   tree.setNodeValue(key, occupied ? tree.getClampingThresMaxLog() : tree.getClampingThresMinLog());
+}
+
+std::vector<Eigen::Vector3d> OccupiedVoxelsNear(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points,
+                                                double radius, size_t max_voxels) {
+  if (!(radius >= 0.0) || !std::isfinite(radius)) {
+    throw std::invalid_argument("voxels near the path: the radius must be a finite number of metres >= 0");
+  }
+  const double res = map.resolution();
+  const long reach = static_cast<long>(std::ceil(radius / res));
+  std::set<std::tuple<long, long, long>> seen;
+  std::vector<Eigen::Vector3d> centers;
+  const double spacing = std::max(0.5 * res, 0.25 * radius);
+  Eigen::Vector3d kept = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  for (size_t p = 0; p < points.size(); ++p) {
+    const Eigen::Vector3d& point = points[p];
+    if ((point - kept).norm() < spacing && p + 1 != points.size()) continue;
+    kept = point;
+    const long cx = static_cast<long>(std::floor(point.x() / res));
+    const long cy = static_cast<long>(std::floor(point.y() / res));
+    const long cz = static_cast<long>(std::floor(point.z() / res));
+    for (long dx = -reach; dx <= reach; ++dx) {
+      for (long dy = -reach; dy <= reach; ++dy) {
+        for (long dz = -reach; dz <= reach; ++dz) {
+          const Eigen::Vector3d center((cx + dx + 0.5) * res, (cy + dy + 0.5) * res, (cz + dz + 0.5) * res);
+          // Within the radius of the point, allowing for the checked points' spacing.
+          if ((center - point).norm() > radius + 0.87 * res) continue;
+          if (!seen.emplace(cx + dx, cy + dy, cz + dz).second) continue;
+          if (seen.size() > 20 * max_voxels) {
+            throw std::invalid_argument("voxels near the path: more than " + std::to_string(20 * max_voxels) +
+                                        " voxels within the radius of the path (lower it)");
+          }
+          if (!map.IsOccupied(center)) continue;
+          centers.push_back(center);
+          if (centers.size() > max_voxels) {
+            throw std::invalid_argument("voxels near the path: more than " + std::to_string(max_voxels) +
+                                        " occupied voxels within the radius of the path (lower it)");
+          }
+        }
+      }
+    }
+  }
+  return centers;
 }
 
 }  // namespace timeopt

@@ -414,3 +414,22 @@ def test_trajectory_file_and_exports_match_the_command_line(tmp_path):
         trajectory.yaw(ts, yaw="north")
     with pytest.raises(ValueError, match="format"):
         timeopt.export(trajectory, "kml", str(tmp_path / "x"))
+
+
+def test_plan_and_trajectory_pages(tmp_path):
+    # The 3D page from Python: one file holding the inlined libraries and the samples at 50 Hz
+    # (its readiness in a browser is tests/viz/check_plan_page.py's).
+    forest = timeopt.OccupancyMap.load(FOREST)
+    plan = timeopt.plan(FOREST, [1, 1, 1.5], [19, 19, 1.5])
+    assert plan.is_success()
+    page = tmp_path / "plan.html"
+    plan.to_html(str(page), map=forest)
+    text = page.read_text()
+    assert "REVISION=\"111\"" in text and "Chart.js v3" in text      # inlined, no network
+    assert 'data-ready="false"' in text and len(text) < 15 << 20
+    ts, _ = plan.trajectory().sample_rate(50.0)
+    assert '"t": [' in text and text.count(",", text.index('"t": ['), text.index("]", text.index('"t": ['))) == len(ts) - 1
+    plan.trajectory().to_html(str(tmp_path / "t.html"), limits=timeopt.Limits())
+    assert (tmp_path / "t.html").stat().st_size > 1e6
+    with pytest.raises(ValueError):
+        timeopt.plan(FOREST, [1, 1, 1.5], [1, 1, 1.5]).to_html(str(tmp_path / "x.html"))

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -107,5 +108,13 @@ class OccupancyMap {
 
   friend class OccupancyMapInternal;
 };
+
+// The centres of the occupied voxels of `map` (unknown space resolved by its unknown_space())
+// within `radius` metres of the polyline through `points` (checked at points at most half a voxel
+// or a quarter of the radius apart), each once, in the order found. Throws std::invalid_argument
+// for a radius that is not a finite number >= 0, when more than max_voxels of them are occupied,
+// or when more than 20 max_voxels voxels would be looked at (lower the radius).
+std::vector<Eigen::Vector3d> OccupiedVoxelsNear(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points,
+                                                double radius, size_t max_voxels);
 
 }  // namespace timeopt
