@@ -395,9 +395,12 @@ TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
   marginal.constraint_mode = ConstraintMode::kCertified;
   marginal.boundary.start_velocity = Eigen::Vector3d(0.21, 0, 0);
   marginal.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
+  // Whichever way the general path fails on this marginal start (its first linearization has no
+  // solution, or the conic solve breaks down first), it is a numerical error, not a verdict.
   const TemporalResult r = MakeSocpTemporalSolver(no_fallback)->Solve(marginal);
   EXPECT_EQ(r.status, TemporalStatus::kNumericalError) << r.message;
-  EXPECT_THAT(r.message, HasSubstr("does not prove the problem infeasible"));
+  EXPECT_THAT(r.message, ::testing::AnyOf(HasSubstr("does not prove the problem infeasible"),
+                                          HasSubstr("conic solver: numerical_error")));
 }
 
 // Fewer than 3 cells per piece leave a rest-to-rest line no regular cell between its rest cells:

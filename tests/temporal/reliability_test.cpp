@@ -266,5 +266,26 @@ TEST(Reliability, SlowMinimumJerkCurvesAreAnsweredByBothBackends) {
   }
 }
 
+// A straight minimum-jerk piece of 5.9 km at 0.14-0.21 m/s (T = 2035 s, K = 4, paper rows): the
+// conic solver stalled at a relative gap of 1e-6, while the same path at limits 10 times faster
+// (T 203.5 s) was solved. Each cell's time variable is now held in that cell's own time unit
+// (socp_backend.cpp). The answer must not depend on how the limits scale: T x 10^k of the twin
+// at 10^k times the speed and 10^2k times the acceleration is the same T, and Ipopt agrees.
+TEST(Reliability, ALongSlowPathIsSolvedAsItsFasterTwins) {
+  const TemporalProblem p =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_paper_5913.json");
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << ipopt.message;
+  for (const double k : {1.0, 1e-2, 10.0, 1e3}) {
+    TemporalProblem twin = p;
+    twin.limits.max_velocity *= k;
+    twin.limits.max_acceleration *= k * k;
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(twin);
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << k << ": " << r.message;
+    // Both solvers to their 1e-8 tolerances; the discretization is the same at every k.
+    EXPECT_NEAR(r.total_time * k / ipopt.total_time, 1.0, 1e-6) << k;
+  }
+}
+
 }  // namespace
 }  // namespace timeopt
