@@ -13,17 +13,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iterator>
 #include <limits>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <tuple>
+#include <unordered_set>
 
 #include "timeopt/core/enum_strings.h"
 #include "timeopt/core/errors.h"
@@ -542,8 +542,20 @@ std::vector<Eigen::Vector3d> OccupiedVoxelsNear(const OccupancyMap& map, const s
     throw std::invalid_argument("voxels near the path: the radius must be a finite number of metres >= 0");
   }
   const double res = map.resolution();
-  const long reach = static_cast<long>(std::ceil(radius / res));
-  std::set<std::tuple<long, long, long>> seen;
+  const double reach_voxels = std::ceil(radius / res);
+  const auto too_many = [&] {
+    return std::invalid_argument("voxels near the path: more than " + std::to_string(kMaxVoxelLookups) +
+                                 " voxels within the radius of the path to look at (lower it)");
+  };
+  // Refused before any work when one point's neighbourhood alone is above the cap.
+  if (!(std::pow(2.0 * reach_voxels + 1.0, 3) <= static_cast<double>(kMaxVoxelLookups))) throw too_many();
+  const long reach = static_cast<long>(reach_voxels);
+  // Voxel indices packed into one key (OctoMap's keys span 2^16 voxels per axis).
+  const auto key = [](long x, long y, long z) {
+    const auto part = [](long v) { return static_cast<uint64_t>(v + (1L << 20)) & ((uint64_t{1} << 21) - 1); };
+    return (part(x) << 42) | (part(y) << 21) | part(z);
+  };
+  std::unordered_set<uint64_t> seen;
   std::vector<Eigen::Vector3d> centers;
   const double spacing = std::max(0.5 * res, 0.25 * radius);
   Eigen::Vector3d kept = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -560,11 +572,8 @@ std::vector<Eigen::Vector3d> OccupiedVoxelsNear(const OccupancyMap& map, const s
           const Eigen::Vector3d center((cx + dx + 0.5) * res, (cy + dy + 0.5) * res, (cz + dz + 0.5) * res);
           // Within the radius of the point, allowing for the checked points' spacing.
           if ((center - point).norm() > radius + 0.87 * res) continue;
-          if (!seen.emplace(cx + dx, cy + dy, cz + dz).second) continue;
-          if (seen.size() > 20 * max_voxels) {
-            throw std::invalid_argument("voxels near the path: more than " + std::to_string(20 * max_voxels) +
-                                        " voxels within the radius of the path (lower it)");
-          }
+          if (!seen.insert(key(cx + dx, cy + dy, cz + dz)).second) continue;
+          if (seen.size() > kMaxVoxelLookups) throw too_many();
           if (!map.IsOccupied(center)) continue;
           centers.push_back(center);
           if (centers.size() > max_voxels) {

@@ -5,9 +5,12 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
+#include <set>
 #include <string>
 
 #include "timeopt/core/errors.h"
@@ -234,6 +237,52 @@ TEST(OccupancyMapTest, EsdfFromMapEqualsEsdfFromGrid) {
     const Eigen::Vector3i index(x, grid.box.min.y() + 2, grid.box.min.z() + 3);
     EXPECT_EQ(from_map.VoxelDistance(index), from_grid.VoxelDistance(index));
   }
+}
+
+// The occupied voxels near a polyline, against brute force over every voxel of a small map: the
+// same set (each once), and a radius whose neighbourhood alone passes the lookup cap is refused.
+TEST(OccupancyMapTest, OccupiedVoxelsNearAPathMatchBruteForce) {
+  OccupancyMap map(0.1);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> cell(0, 29);
+  for (int n = 0; n < 400; ++n) {
+    map.SetOccupied(Eigen::Vector3d((cell(rng) + 0.5) * 0.1, (cell(rng) + 0.5) * 0.1, (cell(rng) + 0.5) * 0.1), true);
+  }
+  std::vector<Eigen::Vector3d> path;
+  for (int k = 0; k <= 50; ++k) path.emplace_back(0.3 + 0.048 * k, 1.5, 1.0 + 0.02 * k);
+  const double radius = 0.6;
+  const std::vector<Eigen::Vector3d> found = OccupiedVoxelsNear(map, path, radius, 100000);
+  // Brute force: every occupied voxel whose centre is within the radius of the polyline (points
+  // 0.05 m apart, finer than the helper's spacing) is found; the helper may add voxels up to its
+  // stated allowance (the points' spacing and a voxel's half diagonal) beyond the radius.
+  std::set<std::array<long, 3>> found_keys;
+  for (const Eigen::Vector3d& c : found) {
+    EXPECT_TRUE(map.IsOccupied(c));
+    EXPECT_TRUE(found_keys.insert({std::lround(c.x() / 0.1 - 0.5), std::lround(c.y() / 0.1 - 0.5), std::lround(c.z() / 0.1 - 0.5)}).second)
+        << "found twice";
+  }
+  int expected = 0;
+  for (int x = 0; x < 30; ++x) {
+    for (int y = 0; y < 30; ++y) {
+      for (int z = 0; z < 30; ++z) {
+        const Eigen::Vector3d c((x + 0.5) * 0.1, (y + 0.5) * 0.1, (z + 0.5) * 0.1);
+        if (!map.IsOccupied(c)) continue;
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Eigen::Vector3d& p : path) nearest = std::min(nearest, (c - p).norm());
+        if (nearest <= radius) {
+          ++expected;
+          EXPECT_TRUE(found_keys.count({x, y, z})) << x << " " << y << " " << z;
+        }
+        if (found_keys.count({x, y, z})) {
+          EXPECT_LE(nearest, radius + 0.25 * radius + 0.087 + 1e-9);
+        }
+      }
+    }
+  }
+  EXPECT_GT(expected, 10);
+  EXPECT_THROW(OccupiedVoxelsNear(map, path, 1000.0, 100000), std::invalid_argument);
+  EXPECT_THROW(OccupiedVoxelsNear(map, path, -1.0, 100000), std::invalid_argument);
+  EXPECT_THROW(OccupiedVoxelsNear(map, path, radius, 3), std::invalid_argument);  // more occupied than allowed
 }
 
 }  // namespace

@@ -113,7 +113,10 @@ class OccupancyMap {
 // within `radius` metres of the polyline through `points` (checked at points at most half a voxel
 // or a quarter of the radius apart), each once, in the order found. Throws std::invalid_argument
 // for a radius that is not a finite number >= 0, when more than max_voxels of them are occupied,
-// or when more than 20 max_voxels voxels would be looked at (lower the radius).
+// or when more than kMaxVoxelLookups voxels would be looked at (lower the radius; refused at once
+// when one point's neighbourhood alone is larger). Looking at 4e6 voxels takes a few seconds and
+// about 200 MB; the cap allows a 2 m radius along about 300 m of path at 0.1 m voxels.
+inline constexpr size_t kMaxVoxelLookups = 4000000;
 std::vector<Eigen::Vector3d> OccupiedVoxelsNear(const OccupancyMap& map, const std::vector<Eigen::Vector3d>& points,
                                                 double radius, size_t max_voxels);
 
