@@ -187,7 +187,7 @@ std::string ExportPx4Csv(const HeadedSamples& samples) {
     // NED from ENU: north = y, east = x, down = -z; yaw from north, clockwise.
     const double values[11] = {s.position.y(), s.position.x(), -s.position.z(), s.velocity.y(), s.velocity.x(),
                                -s.velocity.z(), s.acceleration.y(), s.acceleration.x(), -s.acceleration.z(),
-                               kPi / 2.0 - samples.yaw.yaw[i], 0.0 - samples.yaw.rate[i] + 0.0};
+                               kPi / 2.0 - samples.yaw.yaw[i], 0.0 - samples.yaw.rate[i]};  // (0 - 0 is +0, not -0)
     for (int c = 0; c < 11; ++c) AppendNumber(&out, values[c], c == 10 ? '\n' : ',');
   }
   return out;

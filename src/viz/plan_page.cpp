@@ -300,28 +300,34 @@ std::string PlanPageHtml(const Trajectory& trajectory, const VehicleLimits& limi
   const double rate = std::min(options.sample_rate_hz, (options.max_samples - 1) / std::max(T, 1e-300));
   const std::vector<TrajectoryState> samples = trajectory.Sample(rate);
   std::string data = "const DATA = {\"title\": " + Quoted(options.title) + ", \"samples\": {";
-  const auto column = [&](const char* name, auto get, const char* format) {
+  // "name": [...] of one number per sample (the times) or three (a vector, x y z per sample).
+  const auto column = [&](const char* name, const std::vector<double>& values, const char* format) {
     data += std::string("\"") + name + "\": [";
-    bool first = true;
-    for (const TrajectoryState& s : samples) {
-      const Eigen::Vector3d v = get(s);
-      for (int a = 0; a < (std::string(name) == "t" ? 1 : 3); ++a) {
-        if (!first) data += ",";
-        first = false;
-        Number(&data, std::string(name) == "t" ? s.t : v(a), format);
-      }
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (i > 0) data += ",";
+      Number(&data, values[i], format);
     }
     data += "]";
   };
-  column("t", [](const TrajectoryState& s) { return s.position; }, "%.9g");
+  std::vector<double> t, p, v, a, j;
+  for (const TrajectoryState& s : samples) {
+    t.push_back(s.t);
+    for (int k = 0; k < 3; ++k) {
+      p.push_back(s.position(k));
+      v.push_back(s.velocity(k));
+      a.push_back(s.acceleration(k));
+      j.push_back(s.jerk(k));
+    }
+  }
+  column("t", t, "%.9g");
   data += ", ";
-  column("p", [](const TrajectoryState& s) { return s.position; }, "%.7g");
+  column("p", p, "%.7g");
   data += ", ";
-  column("v", [](const TrajectoryState& s) { return s.velocity; }, "%.5g");
+  column("v", v, "%.5g");
   data += ", ";
-  column("a", [](const TrajectoryState& s) { return s.acceleration; }, "%.5g");
+  column("a", a, "%.5g");
   data += ", ";
-  column("j", [](const TrajectoryState& s) { return s.jerk; }, "%.5g");
+  column("j", j, "%.5g");
   data += "}, ";
   const Eigen::Vector3d start = samples.front().position, goal = samples.back().position;
   data += "\"start\": " + Triple(start) + ", \"goal\": " + Triple(goal) + ", ";

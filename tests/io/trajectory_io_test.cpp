@@ -77,13 +77,19 @@ TEST(TrajectoryFile, ReadBackSamplesToTheBit) {
   }
 }
 
-void ExpectRefused(const std::string& text, const std::string& message) {
+// f() throws std::invalid_argument whose message contains `message`.
+template <typename F>
+void ExpectInvalid(F f, const std::string& message) {
   try {
-    ParseTrajectoryJson(text, "t.json");
+    f();
     FAIL() << "expected std::invalid_argument containing \"" << message << "\"";
   } catch (const std::invalid_argument& e) {
     EXPECT_THAT(e.what(), HasSubstr(message));
   }
+}
+
+void ExpectRefused(const std::string& text, const std::string& message) {
+  ExpectInvalid([&] { ParseTrajectoryJson(text, "t.json"); }, message);
 }
 
 TEST(TrajectoryFile, BadFilesAreRefusedNamingTheField) {
@@ -261,22 +267,12 @@ TEST(PolynomialSegments, TighterTolerancesSplitAndUnreachableOnesAreRefused) {
   EXPECT_LE(b.max_velocity_error, 1e-8);
   PolynomialFitOptions impossible;
   impossible.max_position_error = 1e-300;
-  try {
-    FitPolynomialSegments(trajectory, impossible);
-    FAIL() << "expected std::invalid_argument";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_THAT(e.what(), HasSubstr("cannot be met"));
-  }
+  ExpectInvalid([&] { FitPolynomialSegments(trajectory, impossible); }, "cannot be met");
   // Tolerances that would need minutes of comparisons are refused by the work cap, not run.
   PolynomialFitOptions slow;
   slow.max_acceleration_error = 1e-7;
   slow.max_comparisons = 1e5;  // (the default 2e7 takes seconds to reach)
-  try {
-    FitPolynomialSegments(trajectory, slow);
-    FAIL() << "expected std::invalid_argument";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_THAT(e.what(), HasSubstr("comparisons"));
-  }
+  ExpectInvalid([&] { FitPolynomialSegments(trajectory, slow); }, "comparisons");
   PolynomialFitOptions bad;
   bad.check_rate_hz = -1;
   EXPECT_THROW(FitPolynomialSegments(trajectory, bad), std::invalid_argument);
