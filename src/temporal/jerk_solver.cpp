@@ -417,14 +417,6 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // Every regular cell's grid values as forms on its window of control values, once (by g0).
   std::vector<internal::BandedProblem::CellMap> cell_map(d.grid.size());
   std::vector<char> mapped(d.grid.size(), 0);
-  const auto map_cell = [&](int g0) -> const internal::BandedProblem::CellMap* {
-    const size_t g = static_cast<size_t>(g0);
-    if (!mapped[g]) {
-      if (!p.MapCell(g0, &cell_map[g])) return nullptr;
-      mapped[g] = 1;
-    }
-    return &cell_map[g];
-  };
   // The rows over a regular cell's three grid values, sum_j coef[j] b_{g0 + j} <= 1 (the velocity
   // and acceleration templates, and the jerk rows of each linearization), go into p only when a
   // solve takes them: on the benchmark's curves (m = 10, K = 50) a solve took 6,340 of 24,553
@@ -467,55 +459,86 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   const auto set_free_b = [&](const std::vector<double>& yy) {
     for (size_t g = 0; g < d.grid.size(); ++g) free_b[g] = p.grid_form[g].Value(yy) - constant[g];
   };
-  // A row's free part at that y, and H = 1 - sum_j coef[j] constant_j, the bound of its free part
-  // (AppendRow scales a row by 1 / |H|; H <= 0 makes it essential).
-  const auto row_value = [&](int g0, const std::array<double, 3>& coef) {
+  // Every waiting row flat, by id - d_rows: its coefficients over its cell's three grid values and
+  // H = 1 - sum_j coef[j] constant_j, the bound of its free part (AppendRow scales a row by
+  // 1 / |H|; H <= 0 makes it essential). The cell rows' once, the jerk rows' at each linearization:
+  // the passes below read them two or three times per linearization, and computing them in each
+  // pass from the templates was 12% of the solve (m = 10, K = 50).
+  struct FlatRow {
+    std::array<double, 3> coef;
+    double H;
+    int g0;
+  };
+  std::vector<FlatRow> flat(cell_rows + templates.jerk_rows.size());
+  const auto set_flat = [&](size_t i, int g0, const std::array<double, 3>& coef) {
     const size_t g = static_cast<size_t>(g0);
-    return coef[0] * free_b[g] + coef[1] * free_b[g + 1] + coef[2] * free_b[g + 2];
+    flat[i] = {coef, 1.0 - coef[0] * constant[g] - coef[1] * constant[g + 1] - coef[2] * constant[g + 2], g0};
   };
-  const auto row_bound = [&](int g0, const std::array<double, 3>& coef) {
-    const size_t g = static_cast<size_t>(g0);
-    return 1.0 - coef[0] * constant[g] - coef[1] * constant[g + 1] - coef[2] * constant[g + 2];
-  };
-  const auto touches = [&](const internal::BandedProblem::CellMap& map, const std::vector<char>& marked) {
-    for (int t = 0; t < map.count; ++t) {
-      if (marked[static_cast<size_t>(map.first + t)]) return true;
-    }
-    return false;
-  };
-  // Puts row `id` into p (kept by the solves); false when it spans too many control values or is
-  // constant and violated.
-  std::vector<char> keep;
-  const auto materialize = [&](size_t id, int g0, const std::array<double, 3>& coef) {
-    const internal::BandedProblem::CellMap* map = map_cell(g0);
-    if (map == nullptr) return false;
-    p.kind = static_cast<int>(id < static_rows ? templates.cell_rows[id - d_rows].kind : LinearRow::Kind::kJerk);
-    p.next_id = static_cast<int>(id);
-    const size_t before = p.rows.size();
-    if (!p.AddCellRow(*map, coef.data(), 1.0)) return false;
-    if (p.rows.size() > before) {
-      p.bandwidth = std::max(p.bandwidth, p.rows.back().count - 1);
-      keep.push_back(1);
-    }
-    state[id - d_rows] = kInP;
-    --waiting;
-    return true;
-  };
-  // f(id, g0, coef) for every waiting row, the jerk rows linearized at `at`; f returns false to
-  // stop (an error), and so does this.
-  const auto for_each_waiting = [&](const std::vector<double>& at, auto&& f) {
-    for (size_t ci = 0; ci < cell_rows; ++ci) {
-      if (state[ci] != kWaiting) continue;
-      const internal::GridRow& row = templates.cell_rows[ci];
-      if (!f(d_rows + ci, row.g0, row.coef)) return false;
-    }
+  for (size_t ci = 0; ci < cell_rows; ++ci) set_flat(ci, templates.cell_rows[ci].g0, templates.cell_rows[ci].coef);
+  const auto set_jerk_flat = [&](const std::vector<double>& at) {
     JerkCoefficients jerk_coefficients(at);
     for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
-      if (state[cell_rows + ti] != kWaiting) continue;
       const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
-      if (!f(static_rows + ti, t.g0, jerk_coefficients(t))) return false;
+      set_flat(cell_rows + ti, t.g0, jerk_coefficients(t));
+    }
+  };
+  // A flat row's free part at the y of set_free_b.
+  const auto row_value = [&](const FlatRow& r) {
+    const size_t g = static_cast<size_t>(r.g0);
+    return r.coef[0] * free_b[g] + r.coef[1] * free_b[g + 1] + r.coef[2] * free_b[g + 2];
+  };
+  // Every cell's map, once (the first grid value g0 of each cell with rows; map_failed: MapCell
+  // refused it, and its rows are refused when taken).
+  std::vector<size_t> cells;
+  std::vector<char> map_failed(d.grid.size(), 0);
+  for (const FlatRow& r : flat) {
+    const size_t g = static_cast<size_t>(r.g0);
+    if (mapped[g]) continue;
+    mapped[g] = 1;
+    cells.push_back(g);
+    map_failed[g] = !p.MapCell(r.g0, &cell_map[g]);
+  }
+  // Per cell: whether its map has a term over a marked control (TouchesMarked for the cell).
+  std::vector<char> cell_marked(d.grid.size(), 0);
+  const auto mark_cells = [&](const std::vector<char>& marked) {
+    for (const size_t g : cells) {
+      bool touches = false;
+      if (!map_failed[g]) {
+        const internal::BandedProblem::CellMap& map = cell_map[g];
+        for (int t = 0; t < map.count && !touches; ++t) touches = marked[static_cast<size_t>(map.first + t)] != 0;
+      }
+      cell_marked[g] = touches;
+    }
+  };
+  // Puts the waiting rows `ids` (by id - d_rows, in order) into p (kept by the solves); false when
+  // one spans too many control values or is constant and violated.
+  std::vector<char> keep;
+  std::vector<size_t> ids;
+  const auto materialize = [&](const std::vector<size_t>& which) {
+    for (const size_t i : which) {
+      const FlatRow& r = flat[i];
+      const size_t g = static_cast<size_t>(r.g0);
+      if (map_failed[g]) return false;
+      p.kind = static_cast<int>(i < cell_rows ? templates.cell_rows[i].kind : LinearRow::Kind::kJerk);
+      p.next_id = static_cast<int>(d_rows + i);
+      const size_t before = p.rows.size();
+      if (!p.AddCellRow(cell_map[g], r.coef.data(), 1.0)) return false;
+      if (p.rows.size() > before) {
+        p.bandwidth = std::max(p.bandwidth, p.rows.back().count - 1);
+        keep.push_back(1);
+      }
+      state[i] = kInP;
+      --waiting;
     }
     return true;
+  };
+  // The waiting rows (by id - d_rows) that `take` picks, in order, into p.
+  const auto take_waiting = [&](auto&& take) {
+    ids.clear();
+    for (size_t i = 0; i < flat.size(); ++i) {
+      if (state[i] == kWaiting && take(i, flat[i])) ids.push_back(i);
+    }
+    return materialize(ids);
   };
   const std::string too_wide = "a row over more than four control values, or a constant one violated";
   // The first start: the control values of the guess.
@@ -563,17 +586,18 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
                 TouchesMarked(p.rows[r], loose);
     }
     set_free_b(y);
-    const bool taken = for_each_waiting(linearization, [&](size_t id, int g0, const std::array<double, 3>& coef) {
-      if (coef[0] <= 0.0 && coef[1] <= 0.0 && coef[2] <= 0.0) {  // holds for b >= 0
-        state[id - d_rows] = kNone;
+    set_jerk_flat(linearization);
+    mark_cells(loose);
+    const bool every_jerk_row = h == 0 && !jerk_aware;
+    const bool taken = take_waiting([&](size_t i, const FlatRow& r) {
+      if (r.coef[0] <= 0.0 && r.coef[1] <= 0.0 && r.coef[2] <= 0.0) {  // holds for b >= 0
+        state[i] = kNone;
         --waiting;
-        return true;
+        return false;
       }
-      const internal::BandedProblem::CellMap* map = map_cell(g0);
-      const double H = row_bound(g0, coef);
-      const bool take = map == nullptr || !(H > 0.0) || (h == 0 && !jerk_aware && id >= static_rows) ||
-                        row_value(g0, coef) >= fraction * H || touches(*map, loose);
-      return !take || materialize(id, g0, coef);
+      const size_t g = static_cast<size_t>(r.g0);
+      return map_failed[g] || !(r.H > 0.0) || (every_jerk_row && i >= cell_rows) || row_value(r) >= fraction * r.H ||
+             cell_marked[g];
     });
     if (!taken) {
       out->why = too_wide;
@@ -617,7 +641,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
         }
         // The same solve with every row decides.
         std::fill(keep.begin(), keep.end(), 1);
-        if (!for_each_waiting(linearization, materialize)) {
+        if (!take_waiting([](size_t, const FlatRow&) { return true; })) {
           out->why = too_wide;
           return false;
         }
@@ -652,25 +676,25 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       for (size_t r = 0; r < p.rows.size(); ++r) {
         if (left_out_violated(r)) mark(p.rows[r].first, p.rows[r].count);
       }
-      for_each_waiting(linearization, [&](size_t, int g0, const std::array<double, 3>& coef) {
+      for (size_t i = 0; i < flat.size(); ++i) {
         // (H > 0: a row with H <= 0 is essential and in p.) (value - H) / H > given, undivided.
-        const double H = row_bound(g0, coef);
-        if (row_value(g0, coef) - H > given * H) {
-          const internal::BandedProblem::CellMap& map = cell_map[static_cast<size_t>(g0)];
+        const FlatRow& r = flat[i];
+        if (state[i] == kWaiting && row_value(r) - r.H > given * r.H) {
+          const internal::BandedProblem::CellMap& map = cell_map[static_cast<size_t>(r.g0)];
           mark(map.first, map.count);
         }
-        return true;
-      });
+      }
       if (violated) {
         for (size_t r = 0; r < p.rows.size(); ++r) {
           const bool add = round + 1 >= kMaxWorkingSetRounds || values[r] >= kWorkingSetFraction * p.h[r] ||
                            (p.id[r] >= static_cast<int>(static_rows) && TouchesMarked(p.rows[r], near));
           keep[r] = keep[r] || add;
         }
-        const bool added = for_each_waiting(linearization, [&](size_t id, int g0, const std::array<double, 3>& coef) {
-          const bool add = round + 1 >= kMaxWorkingSetRounds || row_value(g0, coef) >= kWorkingSetFraction * row_bound(g0, coef) ||
-                           (id >= static_rows && touches(cell_map[static_cast<size_t>(g0)], near));
-          return !add || materialize(id, g0, coef);
+        mark_cells(near);
+        const bool last_round = round + 1 >= kMaxWorkingSetRounds;
+        const bool added = take_waiting([&](size_t i, const FlatRow& r) {
+          return last_round || row_value(r) >= kWorkingSetFraction * r.H ||
+                 (i >= cell_rows && cell_marked[static_cast<size_t>(r.g0)]);
         });
         if (!added) {
           out->why = too_wide;
