@@ -146,6 +146,7 @@ struct Lanes<Pair> {
 struct Band {
   int n = 0, p = 0;
   std::vector<double> v;
+  std::vector<double> inverse;  // 1 / D after Factor
   void Reset(int size, int bandwidth) {
     n = size;
     p = bandwidth;
@@ -155,59 +156,116 @@ struct Band {
   // Adds a to (i, j) and, for i != j, its mirror (stored once).
   void Add(int i, int j, double a) { At(std::max(i, j), std::min(i, j)) += a; }
 
-  // In-place Cholesky L L'; false when a pivot falls below kPivotFloor times its diagonal.
+  // In place L D L', L unit lower triangular: its strict lower band in place, D on the diagonal,
+  // 1 / D in `inverse`. False when a pivot falls below kPivotFloor times its diagonal. This form
+  // keeps square roots and divisions off the recurrences' critical paths (an L L' form had a
+  // square root and a division from one column to the next, and a division per unknown in each
+  // direction of a solve): the factorization's chain has one division per column, the solves'
+  // only multiply-adds. Measured (medians of interleaved runs): the jerk-limited solve at m = 10,
+  // K = 50 4% faster, paper mode's 3%.
   bool Factor() {
+    inverse.resize(static_cast<size_t>(n));
     if (p == 1) {
       // Tridiagonal (the paper's and the certified rows): v[2 i] diagonal, v[2 i + 1] sub-diagonal.
       double* a = v.data();
       for (int j = 0; j < n; ++j) {
         const double original = a[2 * j];
-        const double diag = original - (j > 0 ? a[2 * j + 1] * a[2 * j + 1] : 0.0);
+        const double diag = original - (j > 0 ? a[2 * j + 1] * a[2 * j + 1] * a[2 * j - 2] : 0.0);
         if (!(diag > kPivotFloor * std::abs(original)) || !std::isfinite(diag)) return false;
-        const double l = std::sqrt(diag);
-        a[2 * j] = l;
-        if (j + 1 < n) a[2 * (j + 1) + 1] /= l;
+        const double inv = 1.0 / diag;
+        a[2 * j] = diag;
+        inverse[static_cast<size_t>(j)] = inv;
+        if (j + 1 < n) a[2 * (j + 1) + 1] *= inv;
       }
       return true;
     }
+    if (p == 3) return FactorThree();
+    std::vector<double> w(static_cast<size_t>(p));  // w[j - 1 - k] = L(j, k) D(k)
     for (int j = 0; j < n; ++j) {
       const int lo = std::max(0, j - p);
       double diag = At(j, j);
       const double original = diag;
-      for (int k = lo; k < j; ++k) diag -= At(j, k) * At(j, k);
+      for (int k = lo; k < j; ++k) {
+        const double wk = At(j, k) * At(k, k);
+        w[static_cast<size_t>(j - 1 - k)] = wk;
+        diag -= At(j, k) * wk;
+      }
       if (!(diag > kPivotFloor * std::abs(original)) || !std::isfinite(diag)) return false;
-      const double l = std::sqrt(diag);
-      At(j, j) = l;
+      const double inv = 1.0 / diag;
+      At(j, j) = diag;
+      inverse[static_cast<size_t>(j)] = inv;
       const int hi = std::min(n - 1, j + p);
       for (int i = j + 1; i <= hi; ++i) {
         double a = At(i, j);
-        for (int k = std::max(lo, i - p); k < j; ++k) a -= At(i, k) * At(j, k);
-        At(i, j) = a / l;
+        for (int k = std::max(lo, i - p); k < j; ++k) a -= At(i, k) * w[static_cast<size_t>(j - 1 - k)];
+        At(i, j) = a * inv;
       }
+    }
+    return true;
+  }
+  // Factor for p = 3 (the jerk-limited rows), its loops unrolled: row i's band is
+  // a[4 i .. 4 i + 3] = (i, i), (i, i - 1), (i, i - 2), (i, i - 3); entries before column 0 are 0.
+  bool FactorThree() {
+    double* a = v.data();
+    for (int j = 0; j < n; ++j) {
+      double* rj = a + 4 * static_cast<size_t>(j);
+      const double w1 = j >= 1 ? rj[1] * rj[-4] : 0.0;   // L(j, j - 1) D(j - 1)
+      const double w2 = j >= 2 ? rj[2] * rj[-8] : 0.0;   // L(j, j - 2) D(j - 2)
+      const double w3 = j >= 3 ? rj[3] * rj[-12] : 0.0;  // L(j, j - 3) D(j - 3)
+      const double original = rj[0];
+      const double diag = original - rj[3] * w3 - rj[2] * w2 - rj[1] * w1;
+      if (!(diag > kPivotFloor * std::abs(original)) || !std::isfinite(diag)) return false;
+      const double inv = 1.0 / diag;
+      rj[0] = diag;
+      inverse[static_cast<size_t>(j)] = inv;
+      if (j + 1 < n) rj[5] = (rj[5] - rj[7] * w2 - rj[6] * w1) * inv;  // L(j + 1, j)
+      if (j + 2 < n) rj[10] = (rj[10] - rj[11] * w1) * inv;            // L(j + 2, j)
+      if (j + 3 < n) rj[15] *= inv;                                     // L(j + 3, j)
     }
     return true;
   }
   // Solves L L' x = b in place.
   void Solve(std::vector<double>& b) {
+    // L y = b, then L' x = D^-1 y.
+    double* x = b.data();
+    const double* inv = inverse.data();
     if (p == 1) {
       const double* a = v.data();
-      double* x = b.data();
-      x[0] /= a[0];
-      for (int i = 1; i < n; ++i) x[i] = (x[i] - a[2 * i + 1] * x[i - 1]) / a[2 * i];
-      x[n - 1] /= a[2 * (n - 1)];
-      for (int i = n - 2; i >= 0; --i) x[i] = (x[i] - a[2 * (i + 1) + 1] * x[i + 1]) / a[2 * i];
+      for (int i = 1; i < n; ++i) x[i] -= a[2 * i + 1] * x[i - 1];
+      x[n - 1] *= inv[n - 1];
+      for (int i = n - 2; i >= 0; --i) x[i] = x[i] * inv[i] - a[2 * (i + 1) + 1] * x[i + 1];
+      return;
+    }
+    if (p == 3) {
+      const double* a = v.data();
+      for (int i = 0; i < n; ++i) {
+        const double* r = a + 4 * static_cast<size_t>(i);
+        double t = x[i];
+        if (i >= 3) t -= r[3] * x[i - 3];
+        if (i >= 2) t -= r[2] * x[i - 2];
+        if (i >= 1) t -= r[1] * x[i - 1];
+        x[i] = t;
+      }
+      for (int i = n - 1; i >= 0; --i) {
+        const double* r = a + 4 * static_cast<size_t>(i);
+        double t = x[i] * inv[i];
+        if (i + 3 < n) t -= r[15] * x[i + 3];
+        if (i + 2 < n) t -= r[10] * x[i + 2];
+        if (i + 1 < n) t -= r[5] * x[i + 1];
+        x[i] = t;
+      }
       return;
     }
     for (int i = 0; i < n; ++i) {
-      double a = b[static_cast<size_t>(i)];
-      for (int k = std::max(0, i - p); k < i; ++k) a -= At(i, k) * b[static_cast<size_t>(k)];
-      b[static_cast<size_t>(i)] = a / At(i, i);
+      double t = x[i];
+      for (int k = std::max(0, i - p); k < i; ++k) t -= At(i, k) * x[k];
+      x[i] = t;
     }
     for (int i = n - 1; i >= 0; --i) {
-      double a = b[static_cast<size_t>(i)];
+      double t = x[i] * inv[i];
       const int hi = std::min(n - 1, i + p);
-      for (int k = i + 1; k <= hi; ++k) a -= At(k, i) * b[static_cast<size_t>(k)];
-      b[static_cast<size_t>(i)] = a / At(i, i);
+      for (int k = i + 1; k <= hi; ++k) t -= At(k, i) * x[k];
+      x[i] = t;
     }
   }
 };
@@ -336,7 +394,7 @@ struct BandedIpmWorkspace::Buffers {
   std::vector<double> v[kMaxRowSpan];
   std::vector<CellWindow> windows;
   std::vector<char> shares;  // per cell: its first value is the previous cell's last (EvaluateCells)
-  Band hess, factor;
+  Band hess, factor;  // factor: see Band::Factor
   void Clear() {
     runs.clear();
     order.clear();
