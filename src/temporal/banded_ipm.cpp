@@ -161,8 +161,8 @@ struct Band {
   // keeps square roots and divisions off the recurrences' critical paths (an L L' form had a
   // square root and a division from one column to the next, and a division per unknown in each
   // direction of a solve): the factorization's chain has one division per column, the solves'
-  // only multiply-adds. Measured (medians of interleaved runs): the jerk-limited solve at m = 10,
-  // K = 50 4% faster, paper mode's 3%.
+  // only multiply-adds. Measured (medians of interleaved runs, m = 10, K = 50): paper mode's solve
+  // (p = 1) about 10% faster, the jerk-limited one (p = 2 and 1) about 6%.
   bool Factor() {
     inverse.resize(static_cast<size_t>(n));
     if (p == 1) {
@@ -179,7 +179,7 @@ struct Band {
       }
       return true;
     }
-    if (p == 3) return FactorThree();
+    if (p == 2) return FactorTwo();
     std::vector<double> w(static_cast<size_t>(p));  // w[j - 1 - k] = L(j, k) D(k)
     for (int j = 0; j < n; ++j) {
       const int lo = std::max(0, j - p);
@@ -203,24 +203,23 @@ struct Band {
     }
     return true;
   }
-  // Factor for p = 3 (the jerk-limited rows), its loops unrolled: row i's band is
-  // a[4 i .. 4 i + 3] = (i, i), (i, i - 1), (i, i - 2), (i, i - 3); entries before column 0 are 0.
-  bool FactorThree() {
+  // Factor for p = 2 (the jerk-limited rows over the control values of a C1 quadratic spline),
+  // its loops unrolled: row i's band is a[3 i .. 3 i + 2] = (i, i), (i, i - 1), (i, i - 2);
+  // entries before column 0 are 0.
+  bool FactorTwo() {
     double* a = v.data();
     for (int j = 0; j < n; ++j) {
-      double* rj = a + 4 * static_cast<size_t>(j);
-      const double w1 = j >= 1 ? rj[1] * rj[-4] : 0.0;   // L(j, j - 1) D(j - 1)
-      const double w2 = j >= 2 ? rj[2] * rj[-8] : 0.0;   // L(j, j - 2) D(j - 2)
-      const double w3 = j >= 3 ? rj[3] * rj[-12] : 0.0;  // L(j, j - 3) D(j - 3)
+      double* rj = a + 3 * static_cast<size_t>(j);
+      const double w1 = j >= 1 ? rj[1] * rj[-3] : 0.0;  // L(j, j - 1) D(j - 1)
+      const double w2 = j >= 2 ? rj[2] * rj[-6] : 0.0;  // L(j, j - 2) D(j - 2)
       const double original = rj[0];
-      const double diag = original - rj[3] * w3 - rj[2] * w2 - rj[1] * w1;
+      const double diag = original - rj[2] * w2 - rj[1] * w1;
       if (!(diag > kPivotFloor * std::abs(original)) || !std::isfinite(diag)) return false;
       const double inv = 1.0 / diag;
       rj[0] = diag;
       inverse[static_cast<size_t>(j)] = inv;
-      if (j + 1 < n) rj[5] = (rj[5] - rj[7] * w2 - rj[6] * w1) * inv;  // L(j + 1, j)
-      if (j + 2 < n) rj[10] = (rj[10] - rj[11] * w1) * inv;            // L(j + 2, j)
-      if (j + 3 < n) rj[15] *= inv;                                     // L(j + 3, j)
+      if (j + 1 < n) rj[4] = (rj[4] - rj[5] * w1) * inv;  // L(j + 1, j)
+      if (j + 2 < n) rj[8] *= inv;                        // L(j + 2, j)
     }
     return true;
   }
@@ -236,22 +235,20 @@ struct Band {
       for (int i = n - 2; i >= 0; --i) x[i] = x[i] * inv[i] - a[2 * (i + 1) + 1] * x[i + 1];
       return;
     }
-    if (p == 3) {
+    if (p == 2) {
       const double* a = v.data();
       for (int i = 0; i < n; ++i) {
-        const double* r = a + 4 * static_cast<size_t>(i);
+        const double* r = a + 3 * static_cast<size_t>(i);
         double t = x[i];
-        if (i >= 3) t -= r[3] * x[i - 3];
         if (i >= 2) t -= r[2] * x[i - 2];
         if (i >= 1) t -= r[1] * x[i - 1];
         x[i] = t;
       }
       for (int i = n - 1; i >= 0; --i) {
-        const double* r = a + 4 * static_cast<size_t>(i);
+        const double* r = a + 3 * static_cast<size_t>(i);
         double t = x[i] * inv[i];
-        if (i + 3 < n) t -= r[15] * x[i + 3];
-        if (i + 2 < n) t -= r[10] * x[i + 2];
-        if (i + 1 < n) t -= r[5] * x[i + 1];
+        if (i + 2 < n) t -= r[8] * x[i + 2];
+        if (i + 1 < n) t -= r[4] * x[i + 1];
         x[i] = t;
       }
       return;
