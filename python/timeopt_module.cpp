@@ -21,6 +21,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 #include <pybind11/eigen.h>
+#include <pybind11/eval.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -46,6 +47,8 @@
 #include "timeopt/sim/quadrotor_sim.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
+#include "pickle_state.h"
+#include "timeopt_batch_source.h"
 
 namespace py = pybind11;
 
@@ -428,6 +431,7 @@ PYBIND11_MODULE(timeopt, m) {
       .def_readwrite("min_thrust", &VehicleLimits::min_thrust)
       .def_readwrite("max_tilt", &VehicleLimits::max_tilt)
       .def_readwrite("gravity", &VehicleLimits::gravity)
+      .def(py::pickle(&pickle_state::LimitsState, &pickle_state::LimitsFromState))
       .def("__repr__", [](const VehicleLimits& l) {
         std::ostringstream s;
         const auto axes = [&s](const Eigen::Vector3d& v) { s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]"; };
@@ -514,7 +518,8 @@ PYBIND11_MODULE(timeopt, m) {
           py::arg("sigma"), py::arg("derivative") = 0,
           "f or its derivative in s at global parameters sigma in [0, num_pieces] (piece floor(sigma)): (N, 3).")
       .def("arc_length", [](const PiecewiseCurve& c) { return c.ArcLength(); }, "Arc length, metres.")
-      .def("to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.");
+      .def("to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.")
+      .def(py::pickle(&pickle_state::CurveState, &pickle_state::CurveFromState));
 
   // ---- temporal problem ----
   py::class_<TemporalProblem>(m, "TemporalProblem",
@@ -560,7 +565,8 @@ PYBIND11_MODULE(timeopt, m) {
       .def_property(
           "end_acceleration", [](const TemporalProblem& p) { return ToArray(p.boundary.end_acceleration); },
           [](TemporalProblem& p, const py::handle& v) { p.boundary.end_acceleration = Vec3(v, "end_acceleration"); })
-      .def("validate", &TemporalProblem::Validate, "Raises ValueError naming the first bad field.");
+      .def("validate", &TemporalProblem::Validate, "Raises ValueError naming the first bad field.")
+      .def(py::pickle(&pickle_state::ProblemState, &pickle_state::ProblemFromState));
 
   m.def("load_problem", &ReadTemporalProblemJson, py::arg("path"), "Reads a problem JSON file (docs/formats.md), as `timeopt temporal` does.");
   m.def(
@@ -583,7 +589,8 @@ PYBIND11_MODULE(timeopt, m) {
             }
             return out;
           },
-          "b = sdot^2 at the grid points: (pieces, K + 1).");
+          "b = sdot^2 at the grid points: (pieces, K + 1).")
+      .def(py::pickle(&pickle_state::ProfileState, &pickle_state::ProfileFromState));
 
   py::class_<TemporalResult>(m, "TemporalResult", "The answer of a temporal solve; usable when status is TemporalStatus.optimal.")
       .def_readonly("status", &TemporalResult::status)
@@ -635,6 +642,7 @@ PYBIND11_MODULE(timeopt, m) {
           "start_scale and what became of the start acceleration; or None.")
       .def("is_success", &TemporalResult::is_success)
       .def("to_json", [](const TemporalResult& r) { return TemporalResultToJson(r); }, "The result JSON of `timeopt temporal`.")
+      .def(py::pickle(&pickle_state::ResultState, &pickle_state::ResultFromState))
       .def("__repr__", [](const TemporalResult& r) {
         std::ostringstream s;
         s << "<TemporalResult " << ToString(r.status) << " T=" << r.total_time << " s (" << r.solver << ")>";
@@ -716,6 +724,13 @@ PYBIND11_MODULE(timeopt, m) {
             return py::make_tuple(ToArray(times), Sample(t, ToArray(times)));
           },
           py::arg("rate_hz"), "(ts, (p, v, a, j)) at rate_hz from 0, with the end.")
+      .def(py::pickle([](const Trajectory& t) { return py::make_tuple("Trajectory", TrajectoryToJson(t, -1)); },
+                      [](const py::tuple& state) {
+                        if (state.size() != 2 || !py::isinstance<py::str>(state[0]) || state[0].cast<std::string>() != "Trajectory") {
+                          throw py::value_error("unpickling Trajectory: not a timeopt Trajectory state");
+                        }
+                        return ParseTrajectoryJson(state[1].cast<std::string>(), "pickled trajectory");
+                      }))
       .def_static("load", &ReadTrajectoryJson, py::arg("path"),
                   "Reads a trajectory file (--trajectory of plan, temporal, waypoints; docs/formats.md).")
       .def("save", [](const Trajectory& t, const std::string& path) { WriteTrajectoryJson(t, path); }, py::arg("path"),
@@ -897,6 +912,7 @@ PYBIND11_MODULE(timeopt, m) {
           py::arg("path"), py::arg("map") = nullptr, py::arg("limits") = nullptr,
           "Writes the 3D page of a successful plan (docs/formats.md): pass the map for its voxels and the limits "
           "the plan was made with (default: the planner's defaults).")
+      .def(py::pickle(&pickle_state::PlanState, &pickle_state::PlanFromState))
       .def("__repr__", [](const PlanResult& r) {
         std::ostringstream s;
         s << "<PlanResult " << ToString(r.status);
@@ -1047,4 +1063,26 @@ PYBIND11_MODULE(timeopt, m) {
       },
       py::arg("path"), py::arg("c"), py::arg("G"), py::arg("h"), py::arg("A") = py::none(), py::arg("b") = py::none(),
       py::arg("cones") = py::dict(), "Writes the problem of conic.solve's arguments as a CBF file.");
+
+  // ---- many problems at once (timeopt_batch.py, run in this module's namespace) ----
+  m.def(
+      "_failed_result",
+      [](const std::string& solver, const std::string& message) {
+        TemporalResult r;
+        r.status = TemporalStatus::kInvalidInput;
+        r.solver = solver;
+        r.message = message;
+        return r;
+      },
+      py::arg("solver"), py::arg("message"), "A TemporalResult for a problem of a batch that raised (invalid_input).");
+  m.def(
+      "_failed_plan",
+      [](const std::string& message) {
+        PlanResult r;
+        r.status = PlanStatus::kInvalidInput;
+        r.message = message;
+        return r;
+      },
+      py::arg("message"), "A PlanResult for a query of a batch that raised (invalid_input).");
+  py::exec(kTimeoptBatchSource, m.attr("__dict__"));
 }
