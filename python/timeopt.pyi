@@ -190,6 +190,13 @@ def export(trajectory: Trajectory, format: str, path: str, rate: float = 100.0, 
            max_acceleration_error: float = 2e-2) -> None: ...
 def plan(map: Union[Esdf, OccupancyMap, str], start: ArrayLike, goal: ArrayLike, **options: Any) -> PlanResult: ...
 
+# Many problems at once (python/timeopt_batch.py): in order, equal to a loop of solve / plan; a
+# failing item comes back as its result with a status. client: a dask.distributed.Client.
+def solve_many(problems: Sequence[TemporalProblem], *, solver: str = "socp", threads: Optional[int] = None,
+               client: Any = None, progress: Any = False, max_memory_mb: float = 0.0) -> list[TemporalResult]: ...
+def plan_many(queries: Sequence[Any], *, threads: Optional[int] = None, client: Any = None, progress: Any = False,
+              **options: Any) -> list[PlanResult]: ...
+
 class FlightReport:
     feasible: bool
     tolerance: float

@@ -13,14 +13,31 @@ status and a message; it never stops the batch.
 
 import os as _os
 import sys as _sys
+import threading as _threading
 from concurrent.futures import ThreadPoolExecutor as _ThreadPoolExecutor
 from concurrent.futures import as_completed as _as_completed
 
 
+_solvers = _threading.local()
+
+
+def _solver(solver, max_memory_mb):
+    """This thread's Solver for (solver, max_memory_mb), kept from one batch to the next: its
+    workspaces stay allocated (a fresh Solver's first solves touch new pages). One per thread, as
+    Solver serializes its own solves."""
+    cache = getattr(_solvers, "cache", None)
+    if cache is None:
+        cache = _solvers.cache = {}
+    key = (solver, float(max_memory_mb))
+    if key not in cache:
+        cache[key] = Solver(solver, max_memory_mb)
+    return cache[key]
+
+
 def _solve_each(problems, solver, max_memory_mb):
-    """Solves `problems` one after the other with one Solver (its workspaces reused); a problem
-    that raises becomes a result with status invalid_input and the error as its message."""
-    s = Solver(solver, max_memory_mb)
+    """Solves `problems` one after the other with this thread's Solver; a problem that raises
+    becomes a result with status invalid_input and the error as its message."""
+    s = _solver(solver, max_memory_mb)
     out = []
     for problem in problems:
         try:
@@ -87,7 +104,7 @@ def _reporter(progress, total):
     return line
 
 
-def _run(function, items, extra, *, threads, client, progress, chunks_per_worker=4):
+def _run(function, items, extra, *, threads, client, progress, chunks_per_worker=2):
     """function(chunk, *extra) over chunks of `items`, in order, concatenated."""
     items = list(items)
     if not items:

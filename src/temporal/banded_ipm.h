@@ -25,6 +25,7 @@
 // does not try to certify) is handed to the conic solver, which decides. So statuses never depend
 // on this path.
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -154,11 +155,26 @@ class BandedIpmWorkspace {
 // The working memory of the structured sequential convex programme (jerk_solver.cpp): its
 // problem, its rows' templates and states, and the interior-point solver's vectors. A TemporalSolver keeps
 // one from one jerk-limited solve to the next, so that their pages are mapped already.
+// A template row of the structured programme over its cell's three grid values while it waits
+// outside the problem: coefficients and H, the bound of its free part (jerk_solver.cpp).
+struct WaitingRow {
+  std::array<double, 3> coef;
+  double H;
+  int g0;
+};
+// What the structured programme keeps from one solve to the next. Besides sparing the
+// allocations, this keeps its large vectors off fresh pages: where the allocator returns memory
+// at once (Dask's workers set MALLOC_TRIM_THRESHOLD_=65536, which also fixes glibc's mmap
+// threshold at 128 KiB) every vector of more than 128 KiB allocated per solve was mapped afresh
+// and faulted in page by page.
 struct SolveWorkspace {
   BandedIpmWorkspace ipm;
   BandedProblem problem;
   JerkTemplates templates, coarse_templates;  // of the grid and of the coarse programme's grid
   std::vector<char> row_state;  // per template row: waiting, in the problem, or none
+  std::vector<WaitingRow> waiting_rows;        // per template row
+  std::vector<double> multipliers;             // per row id (SolveStructuredScp's z_by_id)
+  std::vector<BandedProblem::CellMap> cell_maps;  // per grid value (by a cell's first)
 };
 
 // The structured problem of d (rows, cells and forms); false (not applicable) with a reason.

@@ -415,7 +415,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   internal::BandedProblem& p = workspace->problem;
   if (!internal::BuildBandedProblem(d, &p, &out->why)) return false;
   // Every regular cell's grid values as forms on its window of control values, once (by g0).
-  std::vector<internal::BandedProblem::CellMap> cell_map(d.grid.size());
+  std::vector<internal::BandedProblem::CellMap>& cell_map = workspace->cell_maps;
+  cell_map.resize(d.grid.size());
   std::vector<char> mapped(d.grid.size(), 0);
   // The rows over a regular cell's three grid values, sum_j coef[j] b_{g0 + j} <= 1 (the velocity
   // and acceleration templates, and the jerk rows of each linearization), go into p only when a
@@ -464,12 +465,9 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // 1 / |H|; H <= 0 makes it essential). The cell rows' once, the jerk rows' at each linearization:
   // the passes below read them two or three times per linearization, and computing them in each
   // pass from the templates was 12% of the solve (m = 10, K = 50).
-  struct FlatRow {
-    std::array<double, 3> coef;
-    double H;
-    int g0;
-  };
-  std::vector<FlatRow> flat(cell_rows + templates.jerk_rows.size());
+  using FlatRow = internal::WaitingRow;
+  std::vector<FlatRow>& flat = workspace->waiting_rows;
+  flat.resize(cell_rows + templates.jerk_rows.size());
   const auto set_flat = [&](size_t i, int g0, const std::array<double, 3>& coef) {
     const size_t g = static_cast<size_t>(g0);
     flat[i] = {coef, 1.0 - coef[0] * constant[g] - coef[1] * constant[g + 1] - coef[2] * constant[g + 2], g0};
@@ -491,13 +489,15 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // refused it, and its rows are refused when taken).
   std::vector<size_t> cells;
   std::vector<char> map_failed(d.grid.size(), 0);
-  for (const FlatRow& r : flat) {
-    const size_t g = static_cast<size_t>(r.g0);
-    if (mapped[g]) continue;
+  const auto map = [&](int g0) {
+    const size_t g = static_cast<size_t>(g0);
+    if (mapped[g]) return;
     mapped[g] = 1;
     cells.push_back(g);
-    map_failed[g] = !p.MapCell(r.g0, &cell_map[g]);
-  }
+    map_failed[g] = !p.MapCell(g0, &cell_map[g]);
+  };
+  for (const internal::GridRow& row : templates.cell_rows) map(row.g0);
+  for (const internal::JerkRowTemplate& t : templates.jerk_rows) map(t.g0);
   // Per cell: whether its map has a term over a marked control (TouchesMarked for the cell).
   std::vector<char> cell_marked(d.grid.size(), 0);
   const auto mark_cells = [&](const std::vector<char>& marked) {
@@ -547,7 +547,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
   const int base_bandwidth = p.bandwidth;
-  std::vector<double> z_by_id;  // the last solve's multipliers by row id (NaN: not in it)
+  std::vector<double>& z_by_id = workspace->multipliers;  // the last solve's multipliers by row id (NaN: not in it)
+  z_by_id.clear();
   std::vector<double> padded;   // y with zeros past its end, for BandedRow::PaddedValue
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
