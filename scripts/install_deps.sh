@@ -40,6 +40,7 @@ TEST_PACKAGES=(
   pybind11-dev python3-dev          # the Python module (TIMEOPT_BUILD_PYTHON)
   python3-pytest python3-scipy      # tests/python (pytest; scipy.sparse for the conic solver)
   python3-jsonschema                # tests/io/validate_schemas.py (docs/schema against real outputs)
+  python3-distributed python3-dask  # tests/python/test_batch.py (solve_many on a Dask LocalCluster)
   chromium                          # tests/viz/check_plan_page.py (the 3D page in headless Chromium)
 )
 

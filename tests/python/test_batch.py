@@ -2,10 +2,13 @@
 timeopt.solve / timeopt.plan in this process (bit for bit), on threads and on a two-process Dask
 LocalCluster (Debian's python3-distributed; those tests skip, saying why, without it)."""
 
+import csv
 import importlib.util
 import json
 import os
 import pickle
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -202,3 +205,20 @@ def test_plans_on_a_cluster_need_map_paths(dask_client):
     assert many[0].total_time == loop.total_time and same(many[0].temporal, loop.temporal)
     with pytest.raises(TypeError, match="file path"):
         timeopt.plan_many([(timeopt.OccupancyMap.load(FOREST), [1, 1, 1.5], [19, 19, 1.5])], client=dask_client)
+
+
+@needs_dask
+def test_the_example_writes_its_study(tmp_path):
+    # examples/python/batch_dask.py end to end on its own LocalCluster: 2 paths x 3 jerk limits x 2 K.
+    output = tmp_path / "study.csv"
+    run = subprocess.run([sys.executable, os.path.join(SOURCE, "examples", "python", "batch_dask.py"), "--paths", "2",
+                          "--workers", "2", "-o", str(output)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    with open(output) as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 12 and all(row["status"] == "optimal" for row in rows)
+    # Within a path and K, a higher jerk limit never takes longer.
+    for path in ("0", "1"):
+        for K in ("20", "50"):
+            times = [float(r["T_s"]) for r in rows if r["path"] == path and r["K"] == K]
+            assert times == sorted(times, reverse=True)
