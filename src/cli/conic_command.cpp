@@ -31,8 +31,8 @@ struct ConicArgs {
 // The solve's peak memory before fill-in, bytes: 64 MiB for the process, 400 bytes per variable,
 // equality and cone row, 200 per non-zero of A and G (measured 2026-12-03: 320-375 bytes per
 // variable and row on 2e6 of each without non-zeros, 1.28-1.50 GB; 183 per non-zero on a banded
-// LP of 2e5 variables and 2e6 non-zeros, 517 MB). Fill-in of the KKT factor (cones over scattered
-// variables) can add more: not counted.
+// LP of 2e5 variables and 2e6 non-zeros, 517 MB). What the budget leaves goes to the sparse KKT
+// factor's fill-in, which the solver counts before allocating it (SolverOptions::max_factor_bytes).
 double ConicPeakBytes(const conic::Problem& p) {
   constexpr double kProcessBytes = 64.0 * (1 << 20), kRowBytes = 400.0, kNonZeroBytes = 200.0;
   const double rows = static_cast<double>(p.num_variables()) + p.num_equalities() + p.num_cone_rows();
@@ -54,7 +54,9 @@ int RunConic(const ConicArgs& args) {
     throw std::invalid_argument(m.str());
   }
 
-  conic::Solver solver;
+  conic::SolverOptions options;
+  options.max_factor_bytes = std::max<int64_t>(1, static_cast<int64_t>(static_cast<double>(args.max_memory_mib) * (1 << 20) - peak));
+  conic::Solver solver(options);
   conic::Result result;
   std::vector<double> times;
   for (int r = 0; r < args.repeat; ++r) {
@@ -89,7 +91,8 @@ void RegisterConicCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   AddMemoryOption(sub, &args->max_memory_mib,
                   "Memory budget, MiB: a problem whose estimated peak (docs/sizes-and-errors.md) is above it "
-                  "is refused before solving; default: half of this machine's memory");
+                  "is refused before solving, and so is one whose KKT factor with its fill-in does not fit "
+                  "in what is left; default: half of this machine's memory");
   sub->callback([args, &run] { run = [args] { return RunConic(*args); }; });
 }
 

@@ -2,7 +2,10 @@
 // cone, ordered once by AMD and factorized by SparseLdl into a fixed pattern.
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <memory>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -18,7 +21,10 @@ namespace {
 
 class AugmentedKkt final : public KktSystem {
  public:
-  AugmentedKkt(const InternalProblem& problem, const Cones& cones) : problem_(problem), cones_(cones) { Analyze(); }
+  AugmentedKkt(const InternalProblem& problem, const Cones& cones, std::int64_t max_factor_bytes)
+      : problem_(problem), cones_(cones), max_factor_bytes_(max_factor_bytes) {
+    Analyze();
+  }
 
   KktMethod method() const override { return KktMethod::kAugmentedSparse; }
   void LoadData() override;
@@ -40,6 +46,7 @@ class AugmentedKkt final : public KktSystem {
 
   const InternalProblem& problem_;
   const Cones& cones_;
+  std::int64_t max_factor_bytes_ = 0;  // 0: no limit
   std::vector<int> perm, pinv;           // perm[new] = old, pinv[old] = new
   std::vector<int> k_ptr, k_idx;         // permuted upper triangle, diagonal last in each column
   std::vector<double> k_val;
@@ -175,6 +182,19 @@ void AugmentedKkt::Analyze() {
   }
   k_reg.assign(num_kkt, 0.0);
 
+  // The factor's size with its fill-in, before any of it is allocated: a few hundred bytes of
+  // input can have a factor of gigabytes (cones over scattered variables fill in).
+  const long long nonzeros = SparseLdl::CountFactorNonzeros(num_kkt, k_ptr, k_idx);
+  const double bytes = static_cast<double>(nonzeros) * SolverOptions::kFactorBytesPerNonzero;
+  if (nonzeros > std::numeric_limits<int>::max() ||
+      (max_factor_bytes_ > 0 && bytes > static_cast<double>(max_factor_bytes_))) {
+    std::ostringstream m;
+    m << "the KKT factor of " << num_kkt << " rows has " << nonzeros << " non-zeros with its fill-in (about "
+      << static_cast<long long>(bytes / (1 << 20)) << " MiB), ";
+    if (nonzeros > std::numeric_limits<int>::max()) m << "more than 32-bit indices address";
+    else m << "above the memory budget of " << max_factor_bytes_ / (1 << 20) << " MiB for it";
+    throw std::invalid_argument(m.str());
+  }
   ldl.Analyze(num_kkt, k_ptr, k_idx);
   for (Eigen::VectorXd* v : {&perm_rhs, &perm_sol, &perm_res, &perm_corr}) v->setZero(num_kkt);
 }
@@ -314,8 +334,9 @@ int AugmentedKkt::Refine(const Eigen::VectorXd& rhs, Eigen::VectorXd& sol, const
 
 }  // namespace
 
-std::unique_ptr<KktSystem> MakeAugmentedKkt(const InternalProblem& problem, const Cones& cones) {
-  return std::make_unique<AugmentedKkt>(problem, cones);
+std::unique_ptr<KktSystem> MakeAugmentedKkt(const InternalProblem& problem, const Cones& cones,
+                                            std::int64_t max_factor_bytes) {
+  return std::make_unique<AugmentedKkt>(problem, cones, max_factor_bytes);
 }
 
 }  // namespace timeopt::conic::internal

@@ -13,6 +13,7 @@
 //   expanded cone, ordered by reverse Cuthill-McKee, skyline LDL' (SkylineLdl).
 
 #include <algorithm>
+#include <cstdint>
 #include <memory>
 
 #include <Eigen/Core>
@@ -64,7 +65,10 @@ class KktSystem {
 };
 
 // The augmented system of `problem` (analyzed; values follow with LoadData).
-std::unique_ptr<KktSystem> MakeAugmentedKkt(const InternalProblem& problem, const Cones& cones);
+// max_factor_bytes > 0: throws std::invalid_argument, before allocating the factor, when its
+// non-zeros after fill-in need more (SolverOptions::max_factor_bytes).
+std::unique_ptr<KktSystem> MakeAugmentedKkt(const InternalProblem& problem, const Cones& cones,
+                                            std::int64_t max_factor_bytes);
 
 // The reduced system of `problem`, or null where it is not defined (G has fewer rows than columns or
 // an empty column) or, if `automatic`, does not pay off: more than options.reduced_max_expanded_cones

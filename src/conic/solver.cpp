@@ -125,7 +125,15 @@ Result Solver::Solve(const Problem& problem) {
       continue;
     }
     if (decision.action == Action::kSwitchToAugmented) {
-      W.SwitchToAugmented();
+      try {
+        W.SwitchToAugmented();
+      } catch (const std::invalid_argument& e) {
+        // The augmented factor is above max_factor_bytes: the banded one stalled and there is no
+        // other to switch to.
+        status = Status::kNumericalError;
+        message = std::string("the banded KKT factor stalled, and the sparse one cannot replace it: ") + e.what();
+        break;
+      }
       W.RestoreBest();
       continue;
     }

@@ -67,6 +67,7 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!(reduced_feasibility_tolerance >= 0.0)) return fail("reduced_feasibility_tolerance must be >= 0");
   if (!(reduced_gap_tolerance >= 0.0)) return fail("reduced_gap_tolerance must be >= 0");
   if (stall_iterations < 1) return fail("stall_iterations must be >= 1");
+  if (max_factor_bytes < 0) return fail("max_factor_bytes must be >= 0 (0: no limit)");
   if (!(static_regularization >= 0.0 && std::isfinite(static_regularization))) {
     return fail("static_regularization must be >= 0 and finite");
   }

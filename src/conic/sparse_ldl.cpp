@@ -7,19 +7,11 @@
 
 namespace timeopt::conic {
 
-void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
-  if (n < 0 || static_cast<int>(col_ptr.size()) != n + 1) {
-    throw std::invalid_argument("SparseLdl::Analyze: col_ptr has " + std::to_string(col_ptr.size()) +
-                                " entries, expected " + std::to_string(n + 1));
-  }
-  n_ = n;
-  a_col_ptr_ = col_ptr;
-  a_row_ = row_idx;
+namespace {
 
-  // Elimination tree (with path-compressed ancestors) and the pattern of every row of L: row k of L
-  // holds the nodes met when walking up the tree from each i < k in column k of the upper triangle,
-  // stopping at nodes already visited for k.
-  std::vector<int> parent(n, -1), ancestor(n, -1), mark(n, -1);
+// The elimination tree of the upper triangle (col_ptr, row_idx): parent[i] = -1 at a root.
+std::vector<int> EliminationTree(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
+  std::vector<int> parent(n, -1), ancestor(n, -1);
   for (int k = 0; k < n; ++k) {
     for (int p = col_ptr[k]; p < col_ptr[k + 1]; ++p) {
       int i = row_idx[p];
@@ -34,6 +26,45 @@ void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vecto
       }
     }
   }
+  return parent;
+}
+
+}  // namespace
+
+long long SparseLdl::CountFactorNonzeros(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
+  if (n < 0 || static_cast<int>(col_ptr.size()) != n + 1) {
+    throw std::invalid_argument("SparseLdl::CountFactorNonzeros: col_ptr has " + std::to_string(col_ptr.size()) +
+                                " entries, expected " + std::to_string(n + 1));
+  }
+  const std::vector<int> parent = EliminationTree(n, col_ptr, row_idx);
+  std::vector<int> mark(n, -1);
+  long long count = 0;
+  for (int k = 0; k < n; ++k) {
+    mark[k] = k;
+    for (int p = col_ptr[k]; p < col_ptr[k + 1]; ++p) {
+      for (int i = row_idx[p]; i != -1 && i < k && mark[i] != k; i = parent[i]) {
+        mark[i] = k;
+        ++count;
+      }
+    }
+  }
+  return count;
+}
+
+void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx) {
+  if (n < 0 || static_cast<int>(col_ptr.size()) != n + 1) {
+    throw std::invalid_argument("SparseLdl::Analyze: col_ptr has " + std::to_string(col_ptr.size()) +
+                                " entries, expected " + std::to_string(n + 1));
+  }
+  n_ = n;
+  a_col_ptr_ = col_ptr;
+  a_row_ = row_idx;
+
+  // Elimination tree (with path-compressed ancestors) and the pattern of every row of L: row k of L
+  // holds the nodes met when walking up the tree from each i < k in column k of the upper triangle,
+  // stopping at nodes already visited for k.
+  const std::vector<int> parent = EliminationTree(n, col_ptr, row_idx);
+  std::vector<int> mark(n, -1);
   row_ptr_.assign(n + 1, 0);
   row_col_.clear();
   std::vector<int> col_count(n, 0);

@@ -20,6 +20,10 @@ class SparseLdl {
   /// Symbolic analysis. col_ptr has n+1 entries, row_idx the row of each stored entry; in every column
   /// the rows are < = the column, sorted increasingly, and the last one is the diagonal.
   void Analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx);
+  /// The non-zeros of L strictly below the diagonal that Analyze would give the same pattern
+  /// (the elimination tree walked row by row, nothing stored: O(n) memory, O(nnz(L)) time), so
+  /// that a caller can refuse a factor before allocating it.
+  static long long CountFactorNonzeros(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_idx);
 
   /// Numeric factorization of the matrix whose values (in the order of row_idx) are `values`.
   /// `signs[k]` (+1 or -1) is the expected sign of pivot k. Returns the number of regularized pivots.

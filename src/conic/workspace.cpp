@@ -8,7 +8,7 @@ namespace timeopt::conic {
 bool Solver::Workspace::PatternMatches(const Problem& problem, const Options& options) const {
   if (!analyzed || options.sparse_cone_min_dimension != sparse_min_dim || options.kkt_method != method_option ||
       options.reduced_max_expanded_cones != reduced_max_expanded_cones ||
-      options.reduced_max_profile_per_row != reduced_max_profile_per_row) {
+      options.reduced_max_profile_per_row != reduced_max_profile_per_row || options.max_factor_bytes != max_factor_bytes) {
     return false;
   }
   return data.SamePattern(problem);
@@ -19,6 +19,8 @@ void Solver::Workspace::Analyze(const Problem& problem, const Options& options) 
   method_option = options.kkt_method;
   reduced_max_expanded_cones = options.reduced_max_expanded_cones;
   reduced_max_profile_per_row = options.reduced_max_profile_per_row;
+  max_factor_bytes = options.max_factor_bytes;
+  analyzed = false;  // until the analysis below has passed (it throws for a factor above the budget)
   const int n = problem.num_variables(), p = problem.num_equalities(), m = problem.num_cone_rows();
   const int num_kkt = cones.Layout(problem.cones, sparse_min_dim, n + p + m);
   data.Analyze(problem, cones, num_kkt);
@@ -28,7 +30,7 @@ void Solver::Workspace::Analyze(const Problem& problem, const Options& options) 
   if (method_option != KktMethod::kAugmentedSparse) {
     kkt = internal::MakeReducedKkt(data, cones, method_option == KktMethod::kAutomatic, options);
   }
-  if (!kkt) kkt = internal::MakeAugmentedKkt(data, cones);
+  if (!kkt) kkt = internal::MakeAugmentedKkt(data, cones, max_factor_bytes);
 
   // ---- work memory ----
   for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
@@ -49,7 +51,7 @@ void Solver::Workspace::LoadValues(const Problem& problem, const Options& option
 
 void Solver::Workspace::SwitchToAugmented() {
   const double delta = kkt->static_regularization();
-  kkt = internal::MakeAugmentedKkt(data, cones);
+  kkt = internal::MakeAugmentedKkt(data, cones, max_factor_bytes);
   kkt->LoadData();
   kkt->SetStaticRegularization(delta);
   analyzed = false;

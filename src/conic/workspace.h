@@ -6,6 +6,7 @@
 // workspace.cpp and newton_step.cpp; Solver::Solve (solver.cpp) runs the loop and asks Termination
 // what to do.
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -26,6 +27,7 @@ struct Solver::Workspace {
   KktMethod method_option = KktMethod::kAutomatic;
   int reduced_max_expanded_cones = 0;
   int reduced_max_profile_per_row = 0;
+  std::int64_t max_factor_bytes = 0;
 
   internal::InternalProblem data;
   internal::Cones cones;

@@ -1,6 +1,7 @@
 #include "timeopt/conic/solver.h"
 
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <random>
@@ -824,6 +825,35 @@ TEST(ResolveTest, SamePatternGivesTheSameAsAFreshSolver) {
   const Result other = reused.Solve(Examples()[3].make());
   EXPECT_FALSE(other.reused_symbolic);
   EXPECT_EQ(other.status, Status::kOptimal);
+}
+
+// max_factor_bytes counts the sparse factor's fill-in before allocating it: a budget below the
+// factor the solve reports (its non-zeros x kFactorBytesPerNonzero) is refused with a message
+// naming the factor, one at it solves, and a refused solver solves again once the budget allows.
+TEST(KktMethodTest, TheSparseFactorIsRefusedAboveItsBudgetBeforeItIsBuilt) {
+  const Problem problem = PathProblem(200);
+  Solver::Options options;
+  options.kkt_method = KktMethod::kAugmentedSparse;
+  const Result free_solve = Solver(options).Solve(problem);
+  ASSERT_EQ(free_solve.status, Status::kOptimal) << free_solve.BriefReport();
+  const std::int64_t needed = free_solve.factor_nonzeros * SolverOptions::kFactorBytesPerNonzero;
+  options.max_factor_bytes = needed - 1;
+  Solver tight(options);
+  try {
+    tight.Solve(problem);
+    ADD_FAILURE() << "a factor of " << needed << " bytes solved under a budget of " << needed - 1;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr(std::to_string(free_solve.factor_nonzeros) + " non-zeros with its fill-in"));
+  }
+  options.max_factor_bytes = needed;
+  tight.set_options(options);
+  const Result at_budget = tight.Solve(problem);
+  ASSERT_EQ(at_budget.status, Status::kOptimal) << at_budget.BriefReport();
+  EXPECT_EQ(at_budget.primal_objective, free_solve.primal_objective);
+  options.max_factor_bytes = -1;
+  std::string why;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_THAT(why, ::testing::HasSubstr("max_factor_bytes"));
 }
 
 }  // namespace

@@ -80,5 +80,47 @@ TEST(SparseLdlTest, ReplacesPivotsOfTheWrongSign) {
   EXPECT_NEAR(x[0] + x[1], 1.0, 1e-9);  // the regularized pivot leaves the consistent part exact
 }
 
+// The factor's non-zeros counted without building it equal those of Analyze and those of a dense
+// symbolic elimination (brute force: eliminating pivot k fills (i, j) wherever (i, k) and (j, k)
+// are non-zero), on random patterns from nearly diagonal to heavily filled.
+TEST(SparseLdlTest, CountsTheFactorsNonZerosBeforeBuildingIt) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 30; ++trial) {
+    const int n = 2 + trial;
+    std::vector<std::vector<char>> nonzero(n, std::vector<char>(n, 0));
+    for (int e = 0; e < (trial % 5 + 1) * n / 2; ++e) {
+      const int i = static_cast<int>(rng() % n), j = static_cast<int>(rng() % n);
+      nonzero[std::min(i, j)][std::max(i, j)] = 1;
+    }
+    std::vector<int> col_ptr(n + 1, 0), row_idx;
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < j; ++i) {
+        if (nonzero[i][j]) row_idx.push_back(i);
+      }
+      row_idx.push_back(j);
+      col_ptr[j + 1] = static_cast<int>(row_idx.size());
+    }
+    // Brute force: a dense symmetric pattern, eliminated pivot by pivot.
+    std::vector<std::vector<char>> filled(n, std::vector<char>(n, 0));
+    for (int i = 0; i < n; ++i) {
+      for (int j = i + 1; j < n; ++j) filled[i][j] = filled[j][i] = nonzero[i][j];
+    }
+    long long expected = 0;
+    for (int k = 0; k < n; ++k) {
+      for (int i = k + 1; i < n; ++i) {
+        if (!filled[i][k]) continue;
+        ++expected;
+        for (int j = k + 1; j < n; ++j) {
+          if (filled[j][k]) filled[i][j] = filled[j][i] = 1;
+        }
+      }
+    }
+    SparseLdl ldl;
+    ldl.Analyze(n, col_ptr, row_idx);
+    EXPECT_EQ(SparseLdl::CountFactorNonzeros(n, col_ptr, row_idx), expected) << "trial " << trial;
+    EXPECT_EQ(ldl.num_factor_nonzeros(), expected) << "trial " << trial;
+  }
+}
+
 }  // namespace
 }  // namespace timeopt::conic

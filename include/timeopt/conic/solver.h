@@ -44,6 +44,7 @@
 #include <array>
 #include <functional>
 #include <limits>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -281,6 +282,13 @@ struct SolverOptions {
   int reduced_max_profile_per_row = 16;
   /// How the KKT system is solved; see KktMethod. kAutomatic.
   KktMethod kkt_method = KktMethod::kAutomatic;
+  /// The most memory the sparse KKT factor (kAugmentedSparse) may take, bytes, counted with its
+  /// fill-in before anything of it is allocated: its non-zeros after the elimination, at
+  /// kFactorBytesPerNonzero each. 0 (the default): no limit. Solve throws std::invalid_argument
+  /// naming the factor's size when it is above. (The reduced system's banded factor is bounded by
+  /// reduced_max_profile_per_row.)
+  std::int64_t max_factor_bytes = 0;
+  static constexpr std::int64_t kFactorBytesPerNonzero = 28;
   /// Called after every iteration (and once for the initial point) if set. The library never prints.
   std::function<void(const IterationInfo&)> callback;
 
