@@ -2,7 +2,8 @@
 // problems, profiles, results and plan results as plain Python values (tuples of floats, ints,
 // strings, None), which pickle exactly: a float crosses as its 8 bytes, so an object read back in
 // another process or on another machine equals the one written, to the bit. Enums cross as their
-// names. Each state starts with its kind and kStateVersion; a state of another version is refused
+// names (the spatial status, which has no list of names, as its number). Each state starts with
+// its kind and kStateVersion; a state of another version is refused
 // with a ValueError (pickles are for processes running the same build, as in a Dask cluster).
 //
 // Every field of each struct is carried. A field added to one of these structs must be added
@@ -220,11 +221,14 @@ inline TemporalProfile ProfileFromState(const py::tuple& state) {
       shapes.emplace_back();
       for (const std::string& name : row) {
         CellShape shape{};
-        if (!EnumFromString(name, kCellShapes, &shape)) throw py::value_error("unpickling TemporalProfile: unknown shape '" + name + "'");
+        if (!EnumFromString(name, kCellShapes, &shape)) {
+          throw py::value_error("unpickling TemporalProfile: unknown shape '" + name + "'");
+        }
         shapes.back().push_back(shape);
       }
     }
-    profile = TemporalProfile::JerkLimited(std::move(half), std::move(shapes), r.Get<std::vector<std::vector<double>>>());
+    auto edges = r.Get<std::vector<std::vector<double>>>();
+    profile = TemporalProfile::JerkLimited(std::move(half), std::move(shapes), std::move(edges));
   } else {
     throw py::value_error("unpickling TemporalProfile: unknown kind '" + kind + "'");
   }
@@ -237,7 +241,9 @@ inline py::tuple ResultState(const TemporalResult& t) {
   py::list joints;
   for (const JointInfo& j : t.joints) joints.append(py::make_tuple(j.joint, ToString(j.type), j.speed_ratio, j.angle));
   py::object infeasibility = py::none(), relaxation = py::none();
-  if (t.infeasibility) infeasibility = py::make_tuple(t.infeasibility->cause, t.infeasibility->where, t.infeasibility->detail);
+  if (t.infeasibility) {
+    infeasibility = py::make_tuple(t.infeasibility->cause, t.infeasibility->where, t.infeasibility->detail);
+  }
   if (t.boundary_relaxation) {
     const TemporalResult::BoundaryRelaxation& b = *t.boundary_relaxation;
     relaxation = py::make_tuple(b.start_speed_given, b.start_speed, b.end_speed_given, b.end_speed, b.start_scale,
@@ -286,7 +292,8 @@ inline TemporalResult ResultFromState(const py::tuple& state) {
   t.max_tilt_ratio = r.Optional<double>();
   if (const py::handle h = r.Next(); !h.is_none()) {
     const auto i = h.cast<py::tuple>();
-    t.infeasibility = TemporalResult::Infeasibility{i[0].cast<std::string>(), i[1].cast<std::string>(), i[2].cast<std::string>()};
+    t.infeasibility =
+        TemporalResult::Infeasibility{i[0].cast<std::string>(), i[1].cast<std::string>(), i[2].cast<std::string>()};
   }
   if (const py::handle h = r.Next(); !h.is_none()) {
     const auto b = h.cast<py::tuple>();
@@ -312,7 +319,9 @@ inline TemporalResult ResultFromState(const py::tuple& state) {
 inline py::tuple PlanState(const PlanResult& p) {
   std::vector<double> waypoints(p.waypoints.data(), p.waypoints.data() + p.waypoints.size());
   const SpatialResult& s = p.spatial;
-  const auto cost = [](const SpatialCostBreakdown& c) { return py::make_tuple(c.smoothness, c.collision, c.length, c.dynamic); };
+  const auto cost = [](const SpatialCostBreakdown& c) {
+    return py::make_tuple(c.smoothness, c.collision, c.length, c.dynamic);
+  };
   py::list iterations;
   for (const SpatialIteration& i : s.iterations) {
     iterations.append(py::make_tuple(i.iteration, i.cost, i.step_cost, i.time_seconds, i.step_accepted));
@@ -339,7 +348,9 @@ inline PlanResult PlanFromState(const py::tuple& state) {
     const auto s = r.Get<py::tuple>();
     if (s.size() != 8) throw py::value_error("unpickling PlanResult: the spatial state has the wrong size");
     const int status = s[0].cast<int>();
-    if (status < 0 || status > static_cast<int>(SpatialStatus::kFailure)) throw py::value_error("unpickling PlanResult: spatial status");
+    if (status < 0 || status > static_cast<int>(SpatialStatus::kFailure)) {
+      throw py::value_error("unpickling PlanResult: spatial status " + std::to_string(status));
+    }
     p.spatial.status = static_cast<SpatialStatus>(status);
     p.spatial.message = s[1].cast<std::string>();
     p.spatial.curve = CurveFromState(s[2].cast<py::tuple>());

@@ -107,17 +107,18 @@ def _reporter(progress, total):
 def _run(function, items, extra, *, threads, client, progress, chunks_per_worker=2):
     """function(chunk, *extra) over chunks of `items`, in order, concatenated."""
     items = list(items)
+    if client is None:
+        if threads is None:
+            threads = _os.cpu_count() or 1
+        if not isinstance(threads, int) or isinstance(threads, bool) or threads < 1:
+            raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
     if not items:
         return []
     report = _reporter(progress, len(items))
     if client is not None:
         return _run_dask(function, items, extra, client, report, chunks_per_worker)
-    if threads is None:
-        threads = _os.cpu_count() or 1
-    if not isinstance(threads, int) or isinstance(threads, bool) or threads < 1:
-        raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
-    # Chunks a few times more than threads: a slow problem then holds up one chunk, not a
-    # thread's whole share.
+    # Two chunks per thread (and per worker thread of a cluster): a slow chunk holds up half a
+    # thread's share, not all of it, and few chunks keep a cluster's per-task costs small.
     chunks = _chunks(items, threads * chunks_per_worker)
     results = [None] * len(chunks)
     done = 0

@@ -223,9 +223,9 @@ struct Band {
     }
     return true;
   }
-  // Solves L L' x = b in place.
+  // Solves L D L' x = b in place (after Factor): L y = b, then L' x = D^-1 y.
   void Solve(std::vector<double>& b) {
-    // L y = b, then L' x = D^-1 y.
+    if (n == 0) return;
     double* x = b.data();
     const double* inv = inverse.data();
     if (p == 1) {

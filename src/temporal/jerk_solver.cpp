@@ -463,8 +463,9 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // Every waiting row flat, by id - d_rows: its coefficients over its cell's three grid values and
   // H = 1 - sum_j coef[j] constant_j, the bound of its free part (AppendRow scales a row by
   // 1 / |H|; H <= 0 makes it essential). The cell rows' once, the jerk rows' at each linearization:
-  // the passes below read them two or three times per linearization, and computing them in each
-  // pass from the templates was 12% of the solve (m = 10, K = 50).
+  // the passes below read them two or three times per linearization (computed in each pass from
+  // the templates, the solve took 57.6 M instructions at m = 10, K = 50; 55.2 M this way). Kept in
+  // the workspace (see SolveWorkspace).
   using FlatRow = internal::WaitingRow;
   std::vector<FlatRow>& flat = workspace->waiting_rows;
   flat.resize(cell_rows + templates.jerk_rows.size());
@@ -547,7 +548,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   double best = std::numeric_limits<double>::infinity();
   out->build_seconds += SecondsSince(start);
   const int base_bandwidth = p.bandwidth;
-  std::vector<double>& z_by_id = workspace->multipliers;  // the last solve's multipliers by row id (NaN: not in it)
+  // The last solve's multipliers by row id (NaN: not in it).
+  std::vector<double>& z_by_id = workspace->multipliers;
   z_by_id.clear();
   std::vector<double> padded;   // y with zeros past its end, for BandedRow::PaddedValue
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with

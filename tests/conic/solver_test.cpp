@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <ostream>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -217,6 +218,11 @@ struct ExampleCase {
   int sparse_cone_min_dimension;
   KktMethod kkt_method;
 };
+
+// A case prints as its problem's name (gtest would dump its bytes, a heap address among them,
+// into every ctest name, which then changed from build to build; the method and the cones'
+// expansion are in the test's name already).
+void PrintTo(const ExampleCase& c, std::ostream* os) { *os << c.example.name; }
 
 class KnownOptimumTest : public ::testing::TestWithParam<ExampleCase> {};
 
