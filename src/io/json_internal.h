@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "timeopt/core/enum_strings.h"
+#include "timeopt/core/vehicle_limits.h"
 #include "timeopt/io/curve_io.h"
 
 namespace timeopt::internal {
@@ -43,6 +44,15 @@ void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& kno
 void RequireObject(const nlohmann::json& j, const std::string& field);
 // A scalar (the same on every axis) or an array of 3 finite numbers.
 Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field);
+// The vehicle limits of a "limits" object (where: its field name, e.g. "limits"), laid over
+// *limits: a key present sets its limit, a key absent leaves it. null is "none": no per-axis limit
+// (infinity on every axis), no jerk limit, no quadrotor limit; for gravity, unchanged. Unknown keys
+// are refused. The one reader of limits for problem files and planner configs.
+void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits* limits);
+// The limits as a "limits" object that ReadLimits reads back to the same values: per-axis limits
+// as arrays (null when infinite on every axis), the jerk limit and the optional ones as values or
+// null, gravity.
+nlohmann::json LimitsJson(const VehicleLimits& limits);
 // An array of 3 finite numbers.
 Eigen::Vector3d Vector3(const nlohmann::json& j, const std::string& field);
 // A number with an integer value in [lowest, highest] (30 and 30.0 both read as 30).

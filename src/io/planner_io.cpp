@@ -78,8 +78,6 @@ void WriteKeys(const Options& o, const std::vector<RealKey<Options>>& reals, con
 
 const std::vector<IntKey<PathSearchOptions>> kNoSearchInts = {};
 
-json Vector(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-
 }  // namespace
 
 PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const PlannerOptions& options,
@@ -90,30 +88,7 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
                               context);
   PlannerOptions o = options;
   ReadKeys(root, context, kTopReals, kTopInts, &o);
-  if (root.contains("limits")) {
-    const json& l = root.at("limits");
-    const std::string where = context + ".limits";
-    internal::RequireObject(l, where);
-    internal::RejectUnknownKeys(l, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk"},
-                                where);
-    if (l.contains("max_velocity")) {
-      o.limits.max_velocity = internal::PerAxis(l.at("max_velocity"), where + ".max_velocity");
-    }
-    if (l.contains("max_acceleration")) {
-      o.limits.max_acceleration = internal::PerAxis(l.at("max_acceleration"), where + ".max_acceleration");
-    }
-    if (l.contains("max_acceleration_change")) {
-      const json& v = l.at("max_acceleration_change");
-      if (v.is_null()) o.limits.max_acceleration_change.reset();
-      else o.limits.max_acceleration_change = internal::FiniteNumber(v, where + ".max_acceleration_change");
-    }
-    if (l.contains("max_jerk")) {
-      // null: no jerk limit (the paper's profile, whose acceleration steps between cells).
-      const json& v = l.at("max_jerk");
-      if (v.is_null()) o.limits.max_jerk.reset();
-      else o.limits.max_jerk = internal::PerAxis(v, where + ".max_jerk");
-    }
-  }
+  if (root.contains("limits")) internal::ReadLimits(root.at("limits"), context + ".limits", &o.limits);
   if (root.contains("temporal")) {
     const json& t = root.at("temporal");
     const std::string where = context + ".temporal";
@@ -170,13 +145,7 @@ PlannerOptions ReadPlannerConfigJson(const std::string& path, const PlannerOptio
 std::string PlannerConfigToJson(const PlannerOptions& o, int indent) {
   json root;
   WriteKeys(o, kTopReals, kTopInts, &root);
-  json limits = {{"max_velocity", Vector(o.limits.max_velocity)},
-                 {"max_acceleration", Vector(o.limits.max_acceleration)}};
-  if (o.limits.max_acceleration_change) {
-    limits["max_acceleration_change"] = *o.limits.max_acceleration_change;
-  }
-  limits["max_jerk"] = o.limits.max_jerk ? Vector(*o.limits.max_jerk) : json(nullptr);
-  root["limits"] = limits;
+  root["limits"] = internal::LimitsJson(o.limits);
   root["temporal"] = {{"K", o.temporal_cells_per_piece},
                       {"rho", o.rho},
                       {"constraint_mode", ToString(o.constraint_mode)}};

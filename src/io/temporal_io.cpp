@@ -31,38 +31,12 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
   TemporalProblem p;
   p.curve = internal::CurveFromJson(Require(j, "curve", ""), "curve").curve;
 
-  const json& limits = Require(j, "limits", "");
-  if (!limits.is_object()) throw std::invalid_argument("limits: expected an object");
-  RejectUnknownKeys(limits, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk",
-                             "max_speed", "max_acceleration_norm", "max_thrust", "min_thrust", "max_tilt",
-                             "gravity"},
-                    "limits");
   // The per-axis limits are optional when the quadrotor's norm limits bound the same quantity
   // (TemporalProblem::Validate says which is missing): absent means none on any axis.
-  const auto present = [&](const char* key) { return limits.contains(key) && !limits.at(key).is_null(); };
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  p.limits.max_velocity = present("max_velocity") ? PerAxis(limits.at("max_velocity"), "limits.max_velocity")
-                                                  : Eigen::Vector3d::Constant(kNone);
-  p.limits.max_acceleration = present("max_acceleration")
-                                  ? PerAxis(limits.at("max_acceleration"), "limits.max_acceleration")
-                                  : Eigen::Vector3d::Constant(kNone);
-  const auto optional_number = [&](const char* key, std::optional<double>* field) {
-    if (present(key)) *field = internal::FiniteNumber(limits.at(key), std::string("limits.") + key);
-  };
-  optional_number("max_speed", &p.limits.max_speed);
-  optional_number("max_acceleration_norm", &p.limits.max_acceleration_norm);
-  optional_number("max_thrust", &p.limits.max_thrust);
-  optional_number("min_thrust", &p.limits.min_thrust);
-  optional_number("max_tilt", &p.limits.max_tilt);
-  if (present("gravity")) p.limits.gravity = internal::FiniteNumber(limits.at("gravity"), "limits.gravity");
-  if (limits.contains("max_acceleration_change") && !limits.at("max_acceleration_change").is_null()) {
-    p.limits.max_acceleration_change = internal::FiniteNumber(
-        limits.at("max_acceleration_change"), "limits.max_acceleration_change");
-  }
-
-  if (limits.contains("max_jerk") && !limits.at("max_jerk").is_null()) {
-    p.limits.max_jerk = PerAxis(limits.at("max_jerk"), "limits.max_jerk");
-  }
+  p.limits.max_velocity = Eigen::Vector3d::Constant(kNone);
+  p.limits.max_acceleration = Eigen::Vector3d::Constant(kNone);
+  internal::ReadLimits(Require(j, "limits", ""), "limits", &p.limits);
 
   if (j.contains("boundary")) {
     const json& b = j.at("boundary");

@@ -35,6 +35,13 @@ PlannerOptions Unusual() {
   o.limits.max_velocity = Eigen::Vector3d(1.5, 2.5, 0.75);
   o.limits.max_acceleration = Eigen::Vector3d(3.0, 4.0, 1.25);
   o.limits.max_acceleration_change = 0.3;
+  o.limits.max_jerk = Eigen::Vector3d(12.0, 13.5, 7.25);
+  o.limits.max_speed = 3.5;
+  o.limits.max_acceleration_norm = 4.5;
+  o.limits.max_thrust = 15.0;
+  o.limits.min_thrust = 2.0;
+  o.limits.max_tilt = 0.6;
+  o.limits.gravity = 9.80665;
   o.temporal_cells_per_piece = 37;
   o.rho = 0.01;
   o.constraint_mode = ConstraintMode::kPaper;
@@ -65,6 +72,13 @@ TEST(PlannerConfigJson, RoundTripIsExact) {
   EXPECT_EQ(r.limits.max_velocity, o.limits.max_velocity);
   EXPECT_EQ(r.limits.max_acceleration, o.limits.max_acceleration);
   EXPECT_EQ(r.limits.max_acceleration_change, o.limits.max_acceleration_change);
+  EXPECT_EQ(r.limits.max_jerk, o.limits.max_jerk);
+  EXPECT_EQ(r.limits.max_speed, o.limits.max_speed);
+  EXPECT_EQ(r.limits.max_acceleration_norm, o.limits.max_acceleration_norm);
+  EXPECT_EQ(r.limits.max_thrust, o.limits.max_thrust);
+  EXPECT_EQ(r.limits.min_thrust, o.limits.min_thrust);
+  EXPECT_EQ(r.limits.max_tilt, o.limits.max_tilt);
+  EXPECT_EQ(r.limits.gravity, o.limits.gravity);
   EXPECT_EQ(r.temporal_cells_per_piece, o.temporal_cells_per_piece);
   EXPECT_EQ(r.rho, o.rho);
   EXPECT_EQ(r.constraint_mode, o.constraint_mode);
@@ -93,6 +107,23 @@ TEST(PlannerConfigJson, KeysNotGivenKeepTheOptionsPassedIn) {
   EXPECT_EQ(r.limits.max_velocity, o.limits.max_velocity);
 }
 
+// null removes a limit: a per-axis one becomes none on every axis (and round-trips as null), an
+// optional one unset; gravity null leaves it. The problem file's reader is the same code.
+TEST(PlannerConfigJson, NullRemovesALimitAndRoundTrips) {
+  const PlannerOptions o = Unusual();
+  const PlannerOptions r = ParsePlannerConfigJson(
+      R"({"limits": {"max_velocity": null, "max_speed": null, "max_jerk": null, "gravity": null}})", o);
+  EXPECT_TRUE(r.limits.max_velocity.array().isInf().all());
+  EXPECT_FALSE(r.limits.max_speed.has_value());
+  EXPECT_FALSE(r.limits.max_jerk.has_value());
+  EXPECT_EQ(r.limits.gravity, o.limits.gravity);
+  EXPECT_EQ(r.limits.max_tilt, o.limits.max_tilt);
+  const PlannerOptions back = ParsePlannerConfigJson(PlannerConfigToJson(r), PlannerOptions());
+  EXPECT_TRUE(back.limits.max_velocity.array().isInf().all());
+  EXPECT_FALSE(back.limits.max_speed.has_value());
+  EXPECT_EQ(PlannerConfigToJson(back), PlannerConfigToJson(r));
+}
+
 TEST(PlannerConfigJson, ErrorsNameTheJsonKey) {
   EXPECT_THAT(ErrorOf(R"({"spatial": {"colision_weight": 3}})"),
               HasSubstr("config.spatial.colision_weight: unknown key"));
@@ -101,6 +132,8 @@ TEST(PlannerConfigJson, ErrorsNameTheJsonKey) {
   EXPECT_THAT(ErrorOf(R"({"temporal": {"K": 2.5}})"), HasSubstr("config.temporal.K: expected an integer"));
   EXPECT_THAT(ErrorOf(R"({"temporal": {"K": 100001}})"), HasSubstr("config.temporal.K"));
   EXPECT_THAT(ErrorOf(R"({"limits": {"max_velocity": [1, 2]}})"), HasSubstr("config.limits.max_velocity"));
+  EXPECT_THAT(ErrorOf(R"({"limits": {"max_velocity": "fast"}})"), HasSubstr("config.limits.max_velocity: expected an array"));
+  EXPECT_THAT(ErrorOf(R"({"limits": {"max_sped": 2}})"), HasSubstr("config.limits.max_sped: unknown key"));
   EXPECT_THAT(ErrorOf(R"({"search": []})"), HasSubstr("config.search: expected an object"));
   EXPECT_THAT(ErrorOf(R"({"max_attempts": 1e30})"), HasSubstr("config.max_attempts"));
   EXPECT_THAT(ErrorOf("{"), HasSubstr("config"));
