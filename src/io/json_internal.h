@@ -51,7 +51,8 @@ Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field);
 void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits* limits);
 // The limits as a "limits" object that ReadLimits reads back to the same values: per-axis limits
 // as arrays (null when infinite on every axis), the jerk limit and the optional ones as values or
-// null, gravity.
+// null, gravity. (A per-axis limit infinite on some axes only has no JSON form: such an axis is
+// written as null, which ReadLimits refuses, naming the key.)
 nlohmann::json LimitsJson(const VehicleLimits& limits);
 // An array of 3 finite numbers.
 Eigen::Vector3d Vector3(const nlohmann::json& j, const std::string& field);
