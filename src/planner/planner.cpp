@@ -427,11 +427,9 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   problem.relax_boundary = moving;
   t = Clock::now();
   // One solver per planner, kept while its options stay the same, so that a re-plan reuses its
-  // workspace (the conic solver's symbolic analysis when the sparsity pattern repeats).
-  if (!temporal_ || temporal_options_.tolerance != options.socp.tolerance ||
-      temporal_options_.max_iterations != options.socp.max_iterations ||
-      temporal_options_.structured != options.socp.structured ||
-      temporal_options_.jerk_ipopt_fallback_seconds != options.socp.jerk_ipopt_fallback_seconds) {
+  // workspace (the conic solver's symbolic analysis when the sparsity pattern repeats). Every field
+  // of the options is compared (the memory budget had escapped a field-by-field test).
+  if (!temporal_ || temporal_options_ != options.socp) {
     temporal_ = MakeSocpTemporalSolver(options.socp);
     temporal_options_ = options.socp;
   }

@@ -191,6 +191,15 @@ bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations
 
 }  // namespace
 
+bool SocpTemporalOptions::operator==(const SocpTemporalOptions& o) const {
+  // A field added to the struct mostly changes its size (32 bytes on 64-bit machines): compare it
+  // here too.
+  static_assert(sizeof(void*) != 8 || sizeof(SocpTemporalOptions) == 32,
+                "SocpTemporalOptions has a new field: compare it in operator==");
+  return tolerance == o.tolerance && max_iterations == o.max_iterations && structured == o.structured &&
+         jerk_ipopt_fallback_seconds == o.jerk_ipopt_fallback_seconds && max_memory_bytes == o.max_memory_bytes;
+}
+
 bool SocpTemporalOptions::IsValid(std::string* error) const {
   if (!ValidSolverOptions(tolerance, max_iterations, 1, error)) return false;
   if (!(max_memory_bytes >= 0)) {

@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <gmock/gmock.h>
@@ -206,6 +207,20 @@ TemporalProblem RandomProblem(std::mt19937& rng, int pieces, bool quintic, int K
 // wider sweep); sized by the median cap all reach the solver's 1e-8 tolerances. J is compared with
 // Ipopt to 1e-7 relative, ten times both solvers' tolerance (with rho > 0, J, not T, is what both
 // determine sharply).
+// SocpTemporalOptions compare every field: a change of any one makes two options differ (the
+// planner keeps its solver only while they are equal).
+TEST(TemporalOptions, EveryFieldTakesPartInEquality) {
+  const SocpTemporalOptions base;
+  EXPECT_TRUE(base == SocpTemporalOptions());
+  std::vector<SocpTemporalOptions> changed(5, base);
+  changed[0].tolerance = 1e-7;
+  changed[1].max_iterations = 50;
+  changed[2].structured = false;
+  changed[3].jerk_ipopt_fallback_seconds = 5.0;
+  changed[4].max_memory_bytes = 1 << 20;
+  for (size_t i = 0; i < changed.size(); ++i) EXPECT_TRUE(changed[i] != base) << "field " << i;
+}
+
 TEST(TemporalBackends, RhoConeOnRestToRestQuinticsReachesFullAccuracy) {
   std::mt19937 rng(2026);
   const auto socp = MakeSocpTemporalSolver();

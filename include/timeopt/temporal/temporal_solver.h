@@ -113,6 +113,9 @@ struct SocpTemporalOptions {
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
   // and finite, max_iterations >= 1, jerk_ipopt_fallback_seconds >= 0 and max_memory_bytes >= 0.
   bool IsValid(std::string* error) const;
+  // Every field equal (a planner keeps its solver while its options are).
+  bool operator==(const SocpTemporalOptions& other) const;
+  bool operator!=(const SocpTemporalOptions& other) const { return !(*this == other); }
 };
 
 // Options of the Ipopt backend.
