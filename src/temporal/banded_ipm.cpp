@@ -147,6 +147,7 @@ struct Band {
   int n = 0, p = 0;
   std::vector<double> v;
   std::vector<double> inverse;  // 1 / D after Factor
+  std::vector<double> w;        // Factor's row of L D for bandwidths above 2 (kept: no allocation per factorization)
   void Reset(int size, int bandwidth) {
     n = size;
     p = bandwidth;
@@ -180,7 +181,7 @@ struct Band {
       return true;
     }
     if (p == 2) return FactorTwo();
-    std::vector<double> w(static_cast<size_t>(p));  // w[j - 1 - k] = L(j, k) D(k)
+    w.resize(static_cast<size_t>(p));  // w[j - 1 - k] = L(j, k) D(k)
     for (int j = 0; j < n; ++j) {
       const int lo = std::max(0, j - p);
       double diag = At(j, j);
