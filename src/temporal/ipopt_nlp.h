@@ -4,6 +4,7 @@
 // TemporalDiscretization (b_g = scale_g * x[var_g], see discretization.h).
 //
 //   minimize    J(x) = sum over cells [ 2 ds / (sqrt(b0) + sqrt(b1)) + rho ds ((b1 - b0) / (2 ds))^2 ]
+//               (Ipopt sees J divided by an estimate of its optimum: of order 1 at every time scale)
 //   subject to  0 <= x <= var_upper,   row.lower <= sum row.coef * x <= row.upper  (linear rows)
 //
 // Derivatives of one cell's time g(b0, b1) = 2 ds / S, S = r0 + r1, r = sqrt(b):
@@ -50,6 +51,9 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
   int num_hessian_entries() const { return static_cast<int>(hess_rows_.size()); }
   int num_jacobian_entries() const { return num_jacobian_entries_; }
 
+  // The factor on J in what Ipopt sees (eval_f, eval_grad_f, eval_h): 1 / an estimate of the
+  // optimal J (see the constructor), or 1 when there is none.
+  double objective_scale() const { return objective_scale_; }
   // The point Ipopt last reported through finalize_solution (empty before).
   const std::vector<double>& solution() const { return solution_; }
   Ipopt::SolverReturn solver_return() const { return solver_return_; }
@@ -152,7 +156,11 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
     return v;
   }
 
+  // J(x) unscaled (eval_f reports objective_scale_ J), or its time term alone.
+  double Objective(const Ipopt::Number* x, bool time_only = false) const;
   const TemporalDiscretization& d_;
+  // The factor on J in everything Ipopt sees (see objective_scale()).
+  double objective_scale_ = 1.0;
   std::vector<CellTerms> cells_;
   std::vector<CubicTerms> cubic_;
   std::vector<ConeTerms> cone_;

@@ -976,7 +976,31 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   TemporalResult first;
   std::vector<double> linearization, x;
   if (jerk_rows() == JerkRows::kExact) {
-    solve(JerkRows::kExact, nullptr, nullptr, &first, &linearization, &x);
+    if (!solve(JerkRows::kExact, nullptr, nullptr, &first, &linearization, &x) &&
+        first.status == TemporalStatus::kInfeasible && first.message.find(internal::kLocalVerdict) != std::string::npos) {
+      // A point of local infeasibility of the exact jerk rows, which are not convex, proves
+      // nothing (a line from 0.09 to 0.06 m/s at a jerk limit of 0.018 m/s^3 got this verdict, and
+      // the sequential convex programme's answer holds every limit). The problem without the jerk
+      // rows, convex, decides: infeasible too, and that is a proof; otherwise no verdict.
+      TemporalResult relaxed;
+      std::vector<double> relaxed_b, relaxed_x;
+      const TemporalResult local = first;
+      if (solve(JerkRows::kNone, nullptr, nullptr, &relaxed, &relaxed_b, &relaxed_x)) {
+        first = local;
+        first.status = TemporalStatus::kNumericalError;
+        first.message = local.message + "; without the jerk limit the problem has a solution, so this is no "
+                        "proof that none exists with it";
+      } else if (relaxed.status == TemporalStatus::kInfeasible) {
+        first = relaxed;
+        first.message = "no profile with continuous acceleration meets the limits and the boundary states, even "
+                        "without the jerk limit (" + relaxed.message + ")";
+      } else {
+        first = local;
+        first.status = TemporalStatus::kNumericalError;
+        first.message = local.message + "; the problem without the jerk limit did not solve either (" +
+                        relaxed.message + ")";
+      }
+    }
     return finish(first);
   }
   if (structured_jerk_iterations() > 0) {

@@ -10,6 +10,10 @@
 
 namespace timeopt::internal {
 
+// In a backend's message of an infeasible verdict that is only local (Ipopt on the exact jerk
+// rows, which are not convex): the jerk-limited solve then asks the convex problem without them.
+inline constexpr const char* kLocalVerdict = "this is a local verdict";
+
 // Fills total_time, objective, piece_durations, profile and the dense feasibility ratios (with a
 // jerk limit, max_jerk_ratio too) of an optimal result from the discretization's free values x.
 // May throw std::invalid_argument when the values make no profile.

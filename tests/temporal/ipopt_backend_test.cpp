@@ -109,8 +109,10 @@ void ExpectDerivativesMatchFiniteDifferences(const TemporalDiscretization& d,
   IpoptTemporalNlp nlp(d);
   const int n = d.num_vars;
   ASSERT_EQ(static_cast<int>(x.size()), n);
-  // The objective is the discretization's own (same sums up to rounding: 1e-12 relative).
-  EXPECT_NEAR(Objective(nlp, x), d.Objective(x), 1e-12 * d.Objective(x));
+  // The objective is the discretization's own (same sums up to rounding: 1e-12 relative), times
+  // the NLP's scale.
+  ASSERT_TRUE(std::isfinite(nlp.objective_scale()) && nlp.objective_scale() > 0.0);
+  EXPECT_NEAR(Objective(nlp, x), nlp.objective_scale() * d.Objective(x), 1e-12 * nlp.objective_scale() * d.Objective(x));
 
   const std::vector<double> g = Gradient(nlp, x);
   std::vector<double> g_fd(static_cast<size_t>(n));

@@ -266,6 +266,72 @@ TEST(Reliability, SlowMinimumJerkCurvesAreAnsweredByBothBackends) {
   }
 }
 
+// Slow minimum-jerk curves at K = 315-459 (paper rows; both end tangents vanish, so b is held by
+// its cap next to the ends): the structured path's iterates went round a cycle until its iteration
+// limit, and the conic solver then stalled. The structured path now answers (its corrector only
+// centres after a blocked predictor, banded_ipm.cpp), and must agree with Ipopt, a second solver of
+// the same convex problem, to the sweep's bound for the convex rows: 1e-6 (each solves to 1e-8).
+TEST(Reliability, SlowMinimumJerkCurvesAtLargeKAreAnswered) {
+  for (const char* index : {"2247", "5253", "7827", "8319"}) {
+    const std::string path = std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_minjerk_" + index + ".json";
+    const TemporalProblem p = ReadTemporalProblemJson(path);
+    const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+    const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+    ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << index << ": " << socp.message;
+    ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << index << ": " << ipopt.message;
+    EXPECT_EQ(socp.method, "structured") << index;
+    EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6) << index;
+  }
+}
+
+// A polyline of three 1.5 cm pieces flown in 0.054 s (certified rows, K = 253). Ipopt's
+// complementarity test is absolute, so with the objective in seconds its answer stopped 1.3e-6
+// above the optimum here, 1.3e-4 above on the same path at limits 100 times faster (T = 5.4e-4 s)
+// and 1e-8 above at 100 times slower: the answer depended on the unit of time. Ipopt now sees the
+// objective divided by its value at the starting point. T x k of the twin with speeds k times and
+// accelerations k^2 times slower must be the same to 1e-9 (the same problem in other units; both
+// solves to 1e-8 relative give the same iterates up to rounding), and agree with the structured
+// path to the sweep's bound for the convex rows, 1e-6.
+TEST(Reliability, IpoptAnswersDoNotDependOnTheUnitOfTime) {
+  const TemporalProblem p =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_certified_1177.json");
+  const TemporalResult reference = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_EQ(reference.status, TemporalStatus::kOptimal) << reference.message;
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << ipopt.message;
+  EXPECT_NEAR(ipopt.total_time / reference.total_time, 1.0, 1e-6);
+  for (const double k : {1e-2, 1e2}) {
+    TemporalProblem twin = p;
+    twin.limits.max_velocity /= k;
+    twin.limits.max_acceleration /= k * k;
+    const TemporalResult r = MakeIpoptTemporalSolver()->Solve(twin);
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << k << ": " << r.message;
+    EXPECT_NEAR(r.total_time / k / ipopt.total_time, 1.0, 1e-9) << k;
+  }
+}
+
+// A 0.21 m line from 0.090 to 0.059 m/s at a jerk limit of 0.018 m/s^3 (K = 11): Ipopt on the
+// exact jerk rows converged to a point of local infeasibility, and that was reported as the
+// problem's verdict, while the sequential convex programme's answer holds every limit. The exact
+// rows are not convex: such a verdict is no proof. The problem without the jerk rows has a
+// solution here, so Ipopt now gives no verdict (numerical_error, saying why); the SOCP backend's
+// answer is checked on its own trajectory (the dense ratios, to the sweep's 1e-6).
+TEST(Reliability, IpoptsLocalVerdictOnJerkRowsIsNoProof) {
+  const TemporalProblem p =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_jerk_9791.json");
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << socp.message;
+  EXPECT_LE(socp.max_velocity_ratio, 1.0 + 1e-6);
+  EXPECT_LE(socp.max_acceleration_ratio, 1.0 + 1e-6);
+  EXPECT_LE(socp.max_jerk_ratio, 1.0 + 1e-6);
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  EXPECT_NE(ipopt.status, TemporalStatus::kInfeasible) << ipopt.message;
+  if (ipopt.status != TemporalStatus::kOptimal) {
+    EXPECT_EQ(ipopt.status, TemporalStatus::kNumericalError);
+    EXPECT_THAT(ipopt.message, HasSubstr("no proof"));
+  }
+}
+
 // A straight minimum-jerk piece of 5.9 km at 0.14-0.21 m/s (T = 2035 s, K = 4, paper rows): the
 // conic solver stalled at a relative gap of 1e-6, while the same path at limits 10 times faster
 // (T 203.5 s) was solved. Each cell's time variable is now held in that cell's own time unit
