@@ -82,6 +82,8 @@ constexpr double kInfeasibleMargin = 1e-6;
 // The smallest pivot of the Cholesky factorization relative to its diagonal entry: below it the
 // system is too badly conditioned for this path, and the conic solver takes over.
 constexpr double kPivotFloor = 1e-15;
+// A system that breaks down is factored again with its diagonal raised by this share (Step).
+constexpr double kRegularization = 1e-10;
 
 // Two doubles at once (SSE2 where there is, two scalars elsewhere), for the passes over the rows:
 // Step takes the rows of a run two by two with Pair and the odd one with double, through the same
@@ -404,6 +406,7 @@ struct BandedIpmWorkspace::Buffers {
   std::vector<CellWindow> windows;
   std::vector<char> shares;  // per cell: its first value is the previous cell's last (EvaluateCells)
   Band hess, factor;  // factor: see Band::Factor
+  Band matrix;        // the Newton matrix before factoring (for a regularized factorization)
   void Clear() {
     runs.clear();
     order.clear();
@@ -761,7 +764,19 @@ class BandedIpm {
     inv_sz_.resize(static_cast<size_t>(m_));
     double mu = MatrixPass();
     mu /= m_;
-    if (!factor_.Factor()) return false;
+    matrix_ = factor_;  // (kept for a regularized factorization, below)
+    if (!factor_.Factor()) {
+      // A pivot below kPivotFloor: near the end, with s'z at 1e-14 of J, the rows at their bounds
+      // weigh 1e16 and more, and two nearly parallel ones leave the system singular to rounding.
+      // Once more with every diagonal entry raised by kRegularization of itself (the direction
+      // then slightly damped where the system is nearly singular; the residuals are formed
+      // exactly at the next iterate, so that cannot be mistaken for convergence). Sweep problem
+      // 4194 (paper rows, K = 19) broke down with r_d at 1.09 times its tolerance and went to the
+      // conic solver, which stalled; with it one more step ends optimal.
+      factor_ = matrix_;
+      for (int v = 0; v < n_; ++v) factor_.At(v, v) *= 1.0 + kRegularization;
+      if (!factor_.Factor()) return false;
+    }
     rhs_ = dx_;
     // Predictor.
     factor_.Solve(dx_);
@@ -860,7 +875,7 @@ class BandedIpm {
   double objective_ = 0.0;
   double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
   const bool wide_ = RowPassesAvx2();
-  Band &hess_ = b_.hess, &factor_ = b_.factor;
+  Band &hess_ = b_.hess, &factor_ = b_.factor, &matrix_ = b_.matrix;
 };
 
 }  // namespace

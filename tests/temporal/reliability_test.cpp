@@ -284,6 +284,22 @@ TEST(Reliability, SlowMinimumJerkCurvesAtLargeKAreAnswered) {
   }
 }
 
+// A minimum-jerk curve of three 1 cm pieces at K = 19 (paper rows, T = 0.057 s): the structured
+// path's Newton system broke down with every tolerance met but r_d (at 1.09 times it; s'z at 4e-13
+// of J), and the conic solver then stalled. The system is now factored again with its diagonal
+// raised by 1e-10 of itself; the answer must agree with Ipopt, a second solver of the same convex
+// problem, to the sweep's bound for the convex rows, 1e-6.
+TEST(Reliability, ANearlySingularNewtonSystemIsFactoredAgain) {
+  const TemporalProblem p =
+      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_minjerk_4194.json");
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << socp.message;
+  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << ipopt.message;
+  EXPECT_EQ(socp.method, "structured");
+  EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6);
+}
+
 // A polyline of three 1.5 cm pieces flown in 0.054 s (certified rows, K = 253). Ipopt's
 // complementarity test is absolute, so with the objective in seconds its answer stopped 1.3e-6
 // above the optimum here, 1.3e-4 above on the same path at limits 100 times faster (T = 5.4e-4 s)
