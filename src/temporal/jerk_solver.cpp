@@ -883,8 +883,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     build_time += SecondsSince(start);
     std::vector<double>& x = *x_out;
     x.clear();
-    bool finishing = false;
-    try {
+    const bool solved = internal::MapSolveExceptions(name, out, [&](bool* finishing) {
       if (d.num_vars == 0) {
         if (d.MaxViolation(x) > 0.0) {
           out->status = TemporalStatus::kInfeasible;
@@ -936,26 +935,15 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
           }
         }
       }
-      finishing = true;
+      *finishing = true;
       const std::string message = out->message;
       const bool reduced = out->reduced_accuracy;
       internal::FinishOptimalResult(problem, d, x, out);
       out->message = message;
       out->reduced_accuracy = reduced;
-    } catch (const std::invalid_argument& e) {
-      out->status = finishing ? TemporalStatus::kNumericalError : TemporalStatus::kInvalidInput;
-      out->message = finishing ? name + " backend: the solution makes no profile: " + e.what()
-                               : std::string(e.what());
-      return false;
-    } catch (const std::exception& e) {
-      out->status = TemporalStatus::kNumericalError;
-      out->message = name + " backend: unexpected error: " + e.what();
-      return false;
-    } catch (...) {
-      out->status = TemporalStatus::kNumericalError;
-      out->message = name + " backend: unexpected error";
-      return false;
-    }
+      return true;
+    });
+    if (!solved) return false;
     grid_b->resize(d.grid.size());
     for (size_t g = 0; g < d.grid.size(); ++g) {
       (*grid_b)[g] = std::max(0.0, d.GridB(static_cast<int>(g), x));

@@ -591,45 +591,32 @@ TemporalResult TemporalSolver::SolvePaperOrCertified(const TemporalProblem& prob
     return result;
   }
   const std::string name = result.solver;
-  bool finishing = false;  // an exception while finishing is the solution's fault, not the input's
-  try {
+  internal::MapSolveExceptions(name, &result, [&](bool* finishing) {
     std::vector<double> x;
     if (d.num_vars == 0) {
       // Every grid value is fixed: nothing to optimize, only to check.
       if (d.MaxViolation(x) > 0.0) {
         result.status = TemporalStatus::kInfeasible;
         result.message = "the fixed speeds violate a limit";
-        return result;
+        return false;
       }
-      finishing = true;
+      *finishing = true;
       internal::FinishOptimalResult(problem, d, x, &result);
-      return result;
+      return true;
     }
     SolveDiscretized(d, &result, &x);
-    if (result.status != TemporalStatus::kOptimal) return result;
+    if (result.status != TemporalStatus::kOptimal) return false;
     if (static_cast<int>(x.size()) != d.num_vars) {
       result.status = TemporalStatus::kNumericalError;
       result.message = name + " backend: optimal without a solution of the right size";
-      return result;
+      return false;
     }
     const std::string message = result.message;
-    finishing = true;
+    *finishing = true;
     internal::FinishOptimalResult(problem, d, x, &result);
     result.message = message;
-  } catch (const std::invalid_argument& e) {
-    // From a backend: a problem it cannot represent. From finishing (validation already ran): a
-    // solution that makes no profile, e.g. a cell at zero speed at both ends.
-    result.status = finishing ? TemporalStatus::kNumericalError : TemporalStatus::kInvalidInput;
-    result.message = finishing ? name + " backend: the solution makes no profile: " + e.what()
-                               : std::string(e.what());
-  } catch (const std::exception& e) {
-    result.status = TemporalStatus::kNumericalError;
-    result.message = name + " backend: unexpected error: " + e.what();
-  } catch (...) {
-    // Ipopt's own exceptions do not derive from std::exception.
-    result.status = TemporalStatus::kNumericalError;
-    result.message = name + " backend: unexpected error";
-  }
+    return true;
+  });
   return result;
 }
 
