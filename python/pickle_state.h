@@ -1,4 +1,4 @@
-// Pickling for the Python module (timeopt_module.cpp): the state of limits, curves, temporal
+// Pickling for the Python module (python/bind_*.cpp): the state of limits, curves, temporal
 // problems, profiles, results and plan results as plain Python values (tuples of floats, ints,
 // strings, None), which pickle exactly: a float crosses as its 8 bytes, so an object read back in
 // another process or on another machine equals the one written, to the bit. Enums cross as their

@@ -1,4 +1,4 @@
-# Type stub of the compiled module `timeopt` (python/timeopt_module.cpp), for editors and type
+# Type stub of the compiled module `timeopt` (python/timeopt_module.cpp, python/bind_*.cpp), for editors and type
 # checkers. tests/python checks that it names every public attribute of the module.
 from typing import Any, Optional, Sequence, Tuple, Union
 
