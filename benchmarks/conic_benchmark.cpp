@@ -168,8 +168,8 @@ Problem TemporalProblem(int N, unsigned seed) {
     builder.AddRotatedCone({AffineExpr{{{b + k, 1.0}}, 0.0}, AffineExpr{{}, 0.5}, AffineExpr{{{c + k, 1.0}}, 0.0}});
   }
   for (int k = 0; k < N; ++k) {
-    builder.AddRotatedCone({AffineExpr{{{c + k, 1.0}, {c + k + 1, 1.0}}, 0.0}, AffineExpr{{{d + k, 1.0}}, 0.0},
-                            AffineExpr{{}, sqrt2}});
+    builder.AddRotatedCone(
+        {AffineExpr{{{c + k, 1.0}, {c + k + 1, 1.0}}, 0.0}, AffineExpr{{{d + k, 1.0}}, 0.0}, AffineExpr{{}, sqrt2}});
   }
   std::vector<AffineExpr> big = {AffineExpr{{{t, 1.0}}, 0.0}, AffineExpr{{}, 1.0}};
   for (int k = 0; k < N; ++k) big.push_back(AffineExpr{{{a + k, 1.0}}, 0.0});
@@ -262,8 +262,16 @@ void BM_Temporal(benchmark::State& state) {
   RunSolves(state, problem, "temporal");
 }
 // N = 250 ... 25000 cells: n = 4N + 3 variables, about 1,000 to 100,000. N = 500 is the m=10, K=50 case.
-BENCHMARK(BM_Temporal)->Arg(250)->Arg(500)->Arg(1250)->Arg(2500)->Arg(6250)->Arg(12500)->Arg(25000)
-    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_Temporal)
+    ->Arg(250)
+    ->Arg(500)
+    ->Arg(1250)
+    ->Arg(2500)
+    ->Arg(6250)
+    ->Arg(12500)
+    ->Arg(25000)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
 void BM_TemporalSlope(benchmark::State& state) { Slope(state, "temporal"); }
 BENCHMARK(BM_TemporalSlope)->Iterations(1);
 // The same problems with the augmented sparse KKT method forced (the automatic choice is the reduced
@@ -272,8 +280,16 @@ void BM_TemporalAugmented(benchmark::State& state) {
   const Problem problem = TemporalProblem(static_cast<int>(state.range(0)), 1);
   RunSolves(state, problem, "temporal_augmented", timeopt::conic::KktMethod::kAugmentedSparse);
 }
-BENCHMARK(BM_TemporalAugmented)->Arg(250)->Arg(500)->Arg(1250)->Arg(2500)->Arg(6250)->Arg(12500)->Arg(25000)
-    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_TemporalAugmented)
+    ->Arg(250)
+    ->Arg(500)
+    ->Arg(1250)
+    ->Arg(2500)
+    ->Arg(6250)
+    ->Arg(12500)
+    ->Arg(25000)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
 void BM_TemporalAugmentedSlope(benchmark::State& state) { Slope(state, "temporal_augmented"); }
 BENCHMARK(BM_TemporalAugmentedSlope)->Iterations(1);
 
@@ -281,8 +297,14 @@ void BM_RandomSocp(benchmark::State& state) {
   const Problem problem = timeopt::test_support::RandomPathSocp(static_cast<int>(state.range(0)), 2);
   RunSolves(state, problem, "random");
 }
-BENCHMARK(BM_RandomSocp)->Arg(1000)->Arg(3000)->Arg(10000)->Arg(30000)->Arg(100000)
-    ->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_RandomSocp)
+    ->Arg(1000)
+    ->Arg(3000)
+    ->Arg(10000)
+    ->Arg(30000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
 void BM_RandomSocpSlope(benchmark::State& state) { Slope(state, "random"); }
 BENCHMARK(BM_RandomSocpSlope)->Iterations(1);
 

@@ -78,17 +78,14 @@ void MakePoints(BenchMap* m) {
   const int n = 1 << 20;
   m->random_points.resize(3, n);
   for (int j = 0; j < n; ++j) {
-    m->random_points.col(j) =
-        lo + extent.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    m->random_points.col(j) = lo + extent.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
   }
   m->ordered_points.resize(3, n);
   const double step = 0.02, length = 5.0;
   int j = 0;
   while (j < n) {
-    const Eigen::Vector3d a =
-        lo + extent.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
-    Eigen::Vector3d b =
-        a + length * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
+    const Eigen::Vector3d a = lo + extent.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    Eigen::Vector3d b = a + length * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
     b = b.cwiseMax(lo).cwiseMin(domain.max());
     const int samples = std::max(2, static_cast<int>((b - a).norm() / step));
     for (int k = 0; k < samples && j < n; ++k, ++j) {
@@ -136,8 +133,7 @@ void BM_DynamicEdtBuild(benchmark::State& state, const BenchMap* m, bool full) {
                             static_cast<float>(domain.min().z()));
   const octomap::point3d hi(static_cast<float>(domain.max().x()), static_cast<float>(domain.max().y()),
                             static_cast<float>(domain.max().z()));
-  const float max_distance = full ? static_cast<float>((domain.max() - domain.min()).norm() + 1.0)
-                                  : 2.0f;
+  const float max_distance = full ? static_cast<float>((domain.max() - domain.min()).norm() + 1.0) : 2.0f;
   double rss = 0.0;
   for (auto _ : state) {
     const double before = HeapMiB();
@@ -162,9 +158,8 @@ void BM_Query(benchmark::State& state, const BenchMap* m, bool ordered) {
     }
     benchmark::DoNotOptimize(sum);
   }
-  state.counters["ns_per_query"] =
-      benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_query"] = benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
+                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   SetMapCounters(state, *m);
 }
 
@@ -177,9 +172,8 @@ void BM_Batch(benchmark::State& state, const BenchMap* m, bool ordered) {
     benchmark::DoNotOptimize(distances.data());
     benchmark::DoNotOptimize(gradients.data());
   }
-  state.counters["ns_per_query"] =
-      benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_query"] = benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
+                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   SetMapCounters(state, *m);
 }
 
@@ -190,14 +184,12 @@ void BM_DynamicEdtQuery(benchmark::State& state, const BenchMap* m, bool ordered
                             static_cast<float>(domain.min().z()));
   const octomap::point3d hi(static_cast<float>(domain.max().x()), static_cast<float>(domain.max().y()),
                             static_cast<float>(domain.max().z()));
-  DynamicEDTOctomap edt(static_cast<float>((domain.max() - domain.min()).norm() + 1.0),
-                        m->tree.get(), lo, hi, false);
+  DynamicEDTOctomap edt(static_cast<float>((domain.max() - domain.min()).norm() + 1.0), m->tree.get(), lo, hi, false);
   edt.update(true);
   const Eigen::Matrix3Xd& points = ordered ? m->ordered_points : m->random_points;
   std::vector<octomap::point3d> p(static_cast<size_t>(points.cols()));
   for (Eigen::Index j = 0; j < points.cols(); ++j) {
-    p[static_cast<size_t>(j)] = octomap::point3d(static_cast<float>(points(0, j)),
-                                                 static_cast<float>(points(1, j)),
+    p[static_cast<size_t>(j)] = octomap::point3d(static_cast<float>(points(0, j)), static_cast<float>(points(1, j)),
                                                  static_cast<float>(points(2, j)));
   }
   double sum = 0.0;
@@ -205,9 +197,8 @@ void BM_DynamicEdtQuery(benchmark::State& state, const BenchMap* m, bool ordered
     for (const auto& q : p) sum += edt.getDistance(q);
     benchmark::DoNotOptimize(sum);
   }
-  state.counters["ns_per_query"] =
-      benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["ns_per_query"] = benchmark::Counter(static_cast<double>(state.iterations() * points.cols()),
+                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   SetMapCounters(state, *m);
 }
 
@@ -216,8 +207,7 @@ std::string SharedMapPath() {
     return std::string(dir) + "/maps/geb079.bt";
   }
   const std::filesystem::path source(__FILE__);
-  return (source.parent_path().parent_path().parent_path() / "shared" / "maps" / "geb079.bt")
-      .string();
+  return (source.parent_path().parent_path().parent_path() / "shared" / "maps" / "geb079.bt").string();
 }
 
 }  // namespace
@@ -246,21 +236,21 @@ int main(int argc, char** argv) {
   for (const BenchMap& m : Maps()) {
     const BenchMap* p = &m;
     benchmark::RegisterBenchmark(("BM_EsdfBuild/" + m.name).c_str(), BM_EsdfBuild, p)
-        ->Unit(benchmark::kMillisecond)->Iterations(3);
-    benchmark::RegisterBenchmark(("BM_DynamicEdtBuild/" + m.name + "/full").c_str(),
-                                 BM_DynamicEdtBuild, p, true)
-        ->Unit(benchmark::kMillisecond)->Iterations(1);
-    benchmark::RegisterBenchmark(("BM_DynamicEdtBuild/" + m.name + "/2m").c_str(),
-                                 BM_DynamicEdtBuild, p, false)
-        ->Unit(benchmark::kMillisecond)->Iterations(1);
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(3);
+    benchmark::RegisterBenchmark(("BM_DynamicEdtBuild/" + m.name + "/full").c_str(), BM_DynamicEdtBuild, p, true)
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(1);
+    benchmark::RegisterBenchmark(("BM_DynamicEdtBuild/" + m.name + "/2m").c_str(), BM_DynamicEdtBuild, p, false)
+        ->Unit(benchmark::kMillisecond)
+        ->Iterations(1);
     for (const bool ordered : {false, true}) {
       const std::string kind = ordered ? "Ordered/" : "Random/";
       benchmark::RegisterBenchmark(("BM_Query" + kind + m.name).c_str(), BM_Query, p, ordered)
           ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_Batch" + kind + m.name).c_str(), BM_Batch, p, ordered)
           ->Unit(benchmark::kMillisecond);
-      benchmark::RegisterBenchmark(("BM_DynamicEdtQuery" + kind + m.name).c_str(),
-                                   BM_DynamicEdtQuery, p, ordered)
+      benchmark::RegisterBenchmark(("BM_DynamicEdtQuery" + kind + m.name).c_str(), BM_DynamicEdtQuery, p, ordered)
           ->Unit(benchmark::kMillisecond);
     }
   }

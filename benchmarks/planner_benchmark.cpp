@@ -66,8 +66,7 @@ BENCHMARK(BM_PathSearch)->Unit(benchmark::kMillisecond);
 void BM_SpatialOptimizer(benchmark::State& state) {
   const Scene& s = GetScene();
   SpatialOptimizerOptions options;
-  options.formulation =
-      state.range(0) == 0 ? SpatialFormulation::kSpatial : SpatialFormulation::kTimeCoupled;
+  options.formulation = state.range(0) == 0 ? SpatialFormulation::kSpatial : SpatialFormulation::kTimeCoupled;
   options.safe_distance = 0.5;
   state.SetLabel(ToString(options.formulation));
   size_t i = 0;

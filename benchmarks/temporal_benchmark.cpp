@@ -89,7 +89,8 @@ void BM_Ipopt(benchmark::State& s) { Run(s, TemporalBackend::kIpopt, ConstraintM
 void BM_SocpCertified(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kCertified); }
 
 void Grid(benchmark::internal::Benchmark* b) {
-  for (int m : {5, 10, 20}) for (int K : {30, 50, 100}) b->Args({m, K});
+  for (int m : {5, 10, 20})
+    for (int K : {30, 50, 100}) b->Args({m, K});
   b->Unit(benchmark::kMillisecond);
 }
 BENCHMARK(BM_Socp)->Apply(Grid)->Args({10, 200});
@@ -107,7 +108,10 @@ void BM_SocpConicOnly(benchmark::State& state) {
                         state.range(2) == 1 ? ConstraintMode::kCertified : ConstraintMode::kPaper));
 }
 BENCHMARK(BM_SocpConicOnly)
-    ->Args({10, 50, 0})->Args({10, 50, 1})->Args({10, 200, 0})->Args({10, 200, 1})
+    ->Args({10, 50, 0})
+    ->Args({10, 50, 1})
+    ->Args({10, 200, 0})
+    ->Args({10, 200, 1})
     ->Unit(benchmark::kMillisecond);
 
 // lambda_a (max_acceleration_change = 0.2 m/s^2 per cell): rows over three grid values, which the
@@ -121,9 +125,7 @@ BENCHMARK(BM_SocpLambda)->Args({10, 50})->Unit(benchmark::kMillisecond);
 
 // The planner's temporal case: certified rows, K = 20 (PlannerConfig's defaults), on m = 10 and 27
 // pieces (the forest plan has 27).
-void BM_SocpPlannerCase(benchmark::State& state) {
-  Run(state, TemporalBackend::kSocp, ConstraintMode::kCertified);
-}
+void BM_SocpPlannerCase(benchmark::State& state) { Run(state, TemporalBackend::kSocp, ConstraintMode::kCertified); }
 BENCHMARK(BM_SocpPlannerCase)->Args({10, 20})->Args({27, 20})->Unit(benchmark::kMillisecond);
 
 // rho > 0 (the one large rotated cone of eq. 50): m = 10, K = 50, rho = 0.1 * the third argument.
@@ -135,7 +137,12 @@ void BM_SocpJerkLimited(benchmark::State& state) {
   p.limits.max_jerk = Eigen::Vector3d::Constant(10.0);
   RunProblem(state, TemporalBackend::kSocp, p);
 }
-BENCHMARK(BM_SocpJerkLimited)->Args({10, 50})->Args({20, 50})->Args({10, 200})->Args({5, 30})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SocpJerkLimited)
+    ->Args({10, 50})
+    ->Args({20, 50})
+    ->Args({10, 200})
+    ->Args({5, 30})
+    ->Unit(benchmark::kMillisecond);
 
 // The quadrotor's own limits (issue 20) on the same curves, no per-axis limits: max_speed 3,
 // thrust in [g - 3, g + 3], tilt 0.5 rad. Third argument: 0 paper rows, 1 certified (cones on every
@@ -194,8 +201,13 @@ BENCHMARK(BM_IpoptRho)->Args({10, 50, 1})->Args({10, 50, 10})->Unit(benchmark::k
 // Scaling in N = m K with K = 50 fixed (m = 2 .. 400).
 void BM_SocpScaling(benchmark::State& s) { Run(s, TemporalBackend::kSocp, ConstraintMode::kPaper); }
 BENCHMARK(BM_SocpScaling)
-    ->Args({2, 50})->Args({5, 50})->Args({20, 50})->Args({50, 50})->Args({100, 50})
-    ->Args({200, 50})->Args({400, 50})
+    ->Args({2, 50})
+    ->Args({5, 50})
+    ->Args({20, 50})
+    ->Args({50, 50})
+    ->Args({100, 50})
+    ->Args({200, 50})
+    ->Args({400, 50})
     ->Unit(benchmark::kMillisecond);
 
 // Collects the scaling runs to print the log-log slope of time against N after the table.
@@ -218,11 +230,14 @@ class SlopeReporter : public benchmark::ConsoleReporter {
     const double n = static_cast<double>(times_.size());
     for (const auto& [cells, t] : times_) {
       const double x = std::log(cells), y = std::log(t);
-      sx += x; sy += y; sxx += x * x; sxy += x * y;
+      sx += x;
+      sy += y;
+      sxx += x * x;
+      sxy += x * y;
     }
     const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-    GetOutputStream() << "log-log slope of SOCP time against cells (" << times_.begin()->first
-                      << " .. " << times_.rbegin()->first << "): " << slope << "\n";
+    GetOutputStream() << "log-log slope of SOCP time against cells (" << times_.begin()->first << " .. "
+                      << times_.rbegin()->first << "): " << slope << "\n";
   }
 
  private:

@@ -81,18 +81,17 @@ int main(int argc, char** argv) {
       ratios.push_back(ms[1] / ms[0]);
       paper_acc.push_back(r[0].max_acceleration_ratio);
       cert_worst.push_back(std::max(r[1].max_acceleration_ratio, r[1].max_velocity_ratio));
-      csv << c << "," << (quintic ? "quintic" : "cubic") << "," << K << "," << r[0].total_time << ","
-          << r[1].total_time << "," << inc << "," << ms[0] << "," << ms[1] << "," << ms[1] / ms[0]
-          << "," << r[0].max_acceleration_ratio << "," << r[1].max_acceleration_ratio << ","
-          << r[1].max_velocity_ratio << "," << r[0].iterations << "," << r[1].iterations << "\n";
+      csv << c << "," << (quintic ? "quintic" : "cubic") << "," << K << "," << r[0].total_time << "," << r[1].total_time
+          << "," << inc << "," << ms[0] << "," << ms[1] << "," << ms[1] / ms[0] << "," << r[0].max_acceleration_ratio
+          << "," << r[1].max_acceleration_ratio << "," << r[1].max_velocity_ratio << "," << r[0].iterations << ","
+          << r[1].iterations << "\n";
     }
-    std::cout << "K=" << K << " (" << increases.size() << " curves): T increase median "
-              << Median(increases) << "% max " << *std::max_element(increases.begin(), increases.end())
-              << "%; solve-time ratio median " << Median(ratios) << " max "
-              << *std::max_element(ratios.begin(), ratios.end()) << "; paper max |a|/amax median "
-              << Median(paper_acc) << " max " << *std::max_element(paper_acc.begin(), paper_acc.end())
-              << "; certified worst ratio " << *std::max_element(cert_worst.begin(), cert_worst.end())
-              << "\n";
+    std::cout << "K=" << K << " (" << increases.size() << " curves): T increase median " << Median(increases)
+              << "% max " << *std::max_element(increases.begin(), increases.end()) << "%; solve-time ratio median "
+              << Median(ratios) << " max " << *std::max_element(ratios.begin(), ratios.end())
+              << "; paper max |a|/amax median " << Median(paper_acc) << " max "
+              << *std::max_element(paper_acc.begin(), paper_acc.end()) << "; certified worst ratio "
+              << *std::max_element(cert_worst.begin(), cert_worst.end()) << "\n";
   }
   std::cout << "written: " << (std::filesystem::path(out_dir) / "certified_vs_paper.csv").string() << "\n";
   return 0;

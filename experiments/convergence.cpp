@@ -20,8 +20,8 @@
 // convergence_topview_decoupled.png and convergence_topview_coupled.png (the paper's Fig. 4(a)/(b):
 // both trajectories of one test over its forest, coloured by speed on one scale; the first test at
 // the second density, or the only one, that both formulations plan). The paper's names and
-// colours: with decoupling red, without blue. Tests run in parallel on all cores, each timed on its own thread; progress on stderr.
-// Usage: experiment_convergence --out DIR [--tests N] [--budget-ms MS] [--densities D ...]
+// colours: with decoupling red, without blue. Tests run in parallel on all cores, each timed on its own thread;
+// progress on stderr. Usage: experiment_convergence --out DIR [--tests N] [--budget-ms MS] [--densities D ...]
 
 #include <algorithm>
 #include <array>
@@ -53,7 +53,7 @@ namespace {
 
 using namespace timeopt;
 
-constexpr const char* kFormulationNames[2] = {"decoupled", "coupled"};       // in the CSVs
+constexpr const char* kFormulationNames[2] = {"decoupled", "coupled"};                    // in the CSVs
 constexpr const char* kFormulationLabels[2] = {"with decoupling", "without decoupling"};  // in the figures
 // Budgets at which the cost reduction is read, ms: both formulations converge within a few ms here,
 // so the paper's 50 ms alone compares converged objectives.
@@ -178,14 +178,14 @@ int main(int argc, char** argv) {
         test.seed = static_cast<int>(forest.seed);
         test.start = pairs[static_cast<size_t>(t)].first;
         test.goal = pairs[static_cast<size_t>(t)].second;
-        for (int f = 0; f < 2; ++f) test.runs[f] = PlanOnce(planner, pairs[static_cast<size_t>(t)].first,
-                                                           pairs[static_cast<size_t>(t)].second, kFormulations[f]);
+        for (int f = 0; f < 2; ++f)
+          test.runs[f] = PlanOnce(planner, pairs[static_cast<size_t>(t)].first, pairs[static_cast<size_t>(t)].second,
+                                  kFormulations[f]);
         const int count = ++done;
         if (count % 25 == 0 || count == tests) {
           std::lock_guard<std::mutex> lock(progress);
           std::cerr << "density " << densities[di] << ": " << count << "/" << tests << " tests, "
-                    << std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count()
-                    << " s\n";
+                    << std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() << " s\n";
         }
       }
     };
@@ -201,10 +201,12 @@ int main(int argc, char** argv) {
         std::vector<Trajectory> trajectories;
         double top_speed = 0.0;
         for (int f = 0; f < 2; ++f) {
-          const PlanResult plan = planner.Plan(pairs[static_cast<size_t>(t.index)].first,
-                                               pairs[static_cast<size_t>(t.index)].second, OptionsFor(kFormulations[f]));
+          const PlanResult plan =
+              planner.Plan(pairs[static_cast<size_t>(t.index)].first, pairs[static_cast<size_t>(t.index)].second,
+                           OptionsFor(kFormulations[f]));
           trajectories.emplace_back(plan.curve, plan.temporal.profile);
-          for (const TrajectoryState& s : trajectories.back().Sample(100.0)) top_speed = std::max(top_speed, s.velocity.norm());
+          for (const TrajectoryState& s : trajectories.back().Sample(100.0))
+            top_speed = std::max(top_speed, s.velocity.norm());
         }
         for (int f = 0; f < 2; ++f) {
           PlanImageOptions image;
@@ -263,7 +265,8 @@ int main(int argc, char** argv) {
         const Run& r = t.runs[f];
         ++count;
         reduction.push_back(1.0 - NormalizedCostAt(r.iterations, budget_ms));
-        for (size_t b = 0; b < kBudgetsMs.size(); ++b) at_budget[b].push_back(1.0 - NormalizedCostAt(r.iterations, kBudgetsMs[b]));
+        for (size_t b = 0; b < kBudgetsMs.size(); ++b)
+          at_budget[b].push_back(1.0 - NormalizedCostAt(r.iterations, kBudgetsMs[b]));
         converge.push_back(r.converge_ms);
         if (r.success) {
           ++success;
@@ -276,8 +279,8 @@ int main(int argc, char** argv) {
       }
       summary << density << "," << kFormulationNames[f] << "," << count << ","
               << static_cast<double>(success) / std::max(1, count) << "," << Quantile(reduction, 0.5) << ","
-              << Quantile(reduction, 0.25) << "," << Quantile(reduction, 0.75) << "," << Quantile(converge, 0.5)
-              << "," << Quantile(clearance, 0.5) << "," << Quantile(smooth, 0.5) << "," << Quantile(flight, 0.5);
+              << Quantile(reduction, 0.25) << "," << Quantile(reduction, 0.75) << "," << Quantile(converge, 0.5) << ","
+              << Quantile(clearance, 0.5) << "," << Quantile(smooth, 0.5) << "," << Quantile(flight, 0.5);
       std::vector<double> medians;
       for (const auto& values : at_budget) {
         medians.push_back(Quantile(values, 0.5));
@@ -341,13 +344,15 @@ int main(int argc, char** argv) {
     panel.x_label = "budget (ms, logarithmic)";
     panel.y_label = "1 - cost/initial";
     panel.log_x = true;
-    for (int f = 0; f < 2; ++f) panel.series.push_back({kFormulationLabels[f], kBudgetsMs, budget_med[f][di], colors[f], false});
+    for (int f = 0; f < 2; ++f)
+      panel.series.push_back({kFormulationLabels[f], kBudgetsMs, budget_med[f][di], colors[f], false});
     budget_panels.push_back(panel);
   }
   WritePlotPng(budget_panels, out + "/convergence_budgets.png");
   PlotPanel reduction{"cost reduction reached in the budget (median)", "density (trees/m^2)", "1 - cost/initial", {}};
   PlotPanel clearance{"final minimum clearance (median)", "density (trees/m^2)", "m", {}};
-  PlotPanel smoothness{"smoothness: integral of |jerk|^2 over the jerk-limited flight (median)", "density (trees/m^2)", "m^2/s^5", {}};
+  PlotPanel smoothness{
+      "smoothness: integral of |jerk|^2 over the jerk-limited flight (median)", "density (trees/m^2)", "m^2/s^5", {}};
   PlotPanel flight_time{"flight time of the jerk-limited profile (median)", "density (trees/m^2)", "s", {}};
   for (int f = 0; f < 2; ++f) {
     reduction.series.push_back({kFormulationLabels[f], densities, reduction_med[f], colors[f], false});

@@ -79,8 +79,8 @@ Lap Fly(const std::string& course, const Waypoints& gates, double level) {
   const Trajectory trajectory(p.curve, r.profile);
   QuadrotorSimOptions options;
   options.limit_tolerance = 0.01;  // the product's flight criterion for jerk-limited plans
-  const FeasibilityReport flight = QuadrotorSim(options).Fly(trajectory, p.limits, Eigen::Vector3d::Zero(),
-                                                             Eigen::Vector3d::Zero());
+  const FeasibilityReport flight =
+      QuadrotorSim(options).Fly(trajectory, p.limits, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   lap.flown_v = flight.max_velocity_ratio;
   lap.flown_a = flight.max_acceleration_ratio;
   lap.held = flight.feasible;
@@ -112,14 +112,14 @@ int main(int argc, char** argv) {
   csv << "course,max_velocity,max_acceleration,max_jerk,solved,lap_time,flown_velocity_ratio,"
          "flown_acceleration_ratio,limits_held\n";
   for (const Lap& l : laps) {
-    csv << l.course << "," << l.vmax << "," << l.amax << "," << l.jmax << "," << (l.solved ? 1 : 0) << ","
-        << l.lap_time << "," << l.flown_v << "," << l.flown_a << "," << (l.held ? 1 : 0) << "\n";
+    csv << l.course << "," << l.vmax << "," << l.amax << "," << l.jmax << "," << (l.solved ? 1 : 0) << "," << l.lap_time
+        << "," << l.flown_v << "," << l.flown_a << "," << (l.held ? 1 : 0) << "\n";
   }
 
   const std::array<double, 3> colors[2] = {{0.15, 0.35, 0.85}, {0.85, 0.25, 0.15}};
   PlotPanel time{"lap time against the limits (vmax = amax = level, jmax = 5 level)", "level", "lap time (s)", {}};
-  PlotPanel ratios{"flown by the jerk-input quadrotor: largest |v|/vmax (solid), |a|/amax (dashed)", "level",
-                   "ratio", {}};
+  PlotPanel ratios{
+      "flown by the jerk-input quadrotor: largest |v|/vmax (solid), |a|/amax (dashed)", "level", "ratio", {}};
   const std::string courses[2] = {"figure_eight", "sharp_turn"};
   for (int c = 0; c < 2; ++c) {
     std::vector<double> x, t, v, a;
@@ -156,8 +156,11 @@ int main(int argc, char** argv) {
       const TrajectoryState& s = fastest->samples[k];
       const TrajectoryState& e = fastest->samples[k + 1];
       const double f = top > 0.0 ? std::min(1.0, s.velocity.norm() / top) : 0.0;
-      panel.series.push_back({"", {s.position.x(), e.position.x()}, {s.position.y(), e.position.y()},
-                              {0.1 + 0.8 * f, 0.2, 0.9 - 0.8 * f}, false});
+      panel.series.push_back({"",
+                              {s.position.x(), e.position.x()},
+                              {s.position.y(), e.position.y()},
+                              {0.1 + 0.8 * f, 0.2, 0.9 - 0.8 * f},
+                              false});
     }
     paths.push_back(panel);
   }

@@ -45,8 +45,7 @@ std::vector<Pair> ReadPairs(const std::string& path) {
     std::replace(line.begin(), line.end(), ',', ' ');
     std::istringstream s(line);
     Pair p;
-    s >> p.trial >> p.map_id >> p.start.x() >> p.start.y() >> p.start.z() >> p.goal.x() >>
-        p.goal.y() >> p.goal.z();
+    s >> p.trial >> p.map_id >> p.start.x() >> p.start.y() >> p.start.z() >> p.goal.x() >> p.goal.y() >> p.goal.z();
     if (s) pairs.push_back(p);
   }
   return pairs;
@@ -87,10 +86,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-pairs", max_pairs, "Pairs per map (at most)")->capture_default_str();
   app.add_option("--max-segment-length", base.max_segment_length, "PlannerOptions::max_segment_length, m")
       ->capture_default_str();
-  app.add_option("--cells", base.temporal_cells_per_piece, "Temporal cells per piece K")
-      ->capture_default_str();
+  app.add_option("--cells", base.temporal_cells_per_piece, "Temporal cells per piece K")->capture_default_str();
   double vmax = 2.0, amax = 2.0;  // the `timeopt plan` defaults
-  double jmax = 0.0;  // the paper's evaluation: no jerk limit (the planner's default is 10 m/s^3)
+  double jmax = 0.0;              // the paper's evaluation: no jerk limit (the planner's default is 10 m/s^3)
   app.add_option("--max-velocity", vmax, "Per-axis velocity limit, m/s")->capture_default_str();
   app.add_option("--max-acceleration", amax, "Per-axis acceleration limit, m/s^2")->capture_default_str();
   app.add_option("--max-jerk", jmax, "Per-axis jerk limit, m/s^3 (0: none, the paper's profile)")
@@ -98,8 +96,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   base.limits.max_velocity.setConstant(vmax);
   base.limits.max_acceleration.setConstant(amax);
-  if (jmax > 0.0) base.limits.max_jerk = Eigen::Vector3d::Constant(jmax);
-  else base.limits.max_jerk.reset();
+  if (jmax > 0.0)
+    base.limits.max_jerk = Eigen::Vector3d::Constant(jmax);
+  else
+    base.limits.max_jerk.reset();
 
   const std::string dir = shared + "/maps/forest_gen";
   std::vector<Pair> pairs;
@@ -120,8 +120,7 @@ int main(int argc, char** argv) {
     const OccupancyMap map = OccupancyMap::Load(path);
     const auto t0 = std::chrono::steady_clock::now();
     const Esdf esdf = Esdf::FromMap(map);
-    esdf_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    esdf_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     Planner planner(esdf);
     for (double radius : radii) {
       for (SpatialFormulation f : formulations) {
@@ -139,31 +138,28 @@ int main(int argc, char** argv) {
 
   std::ofstream csv(out);
   csv << "# experiment_planner_forest: maps " << dir << ", PlannerOptions defaults except vmax "
-      << base.limits.max_velocity.x() << " m/s, amax " << base.limits.max_acceleration.x()
-      << " m/s^2 per axis, K " << base.temporal_cells_per_piece << ", max_segment_length "
-      << base.max_segment_length << " m, certified constraints\n";
+      << base.limits.max_velocity.x() << " m/s, amax " << base.limits.max_acceleration.x() << " m/s^2 per axis, K "
+      << base.temporal_cells_per_piece << ", max_segment_length " << base.max_segment_length
+      << " m, certified constraints\n";
   csv << "radius,formulation,map_id,trial,status,attempts,pieces,search_ms,spatial_ms,check_ms,"
          "temporal_ms,total_ms,iterations,path_length,min_clearance,duration,baseline_duration,"
          "min_interior_speed,min_curvature_radius\n";
   for (const Row& r : rows) {
     double baseline = 0.0;
     for (double d : r.plan.spatial.durations) baseline += d;
-    csv << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << ","
-        << ToString(r.plan.status) << "," << r.plan.spatial_attempts << ","
-        << r.plan.curve.num_pieces() << "," << r.plan.times.search_ms << ","
-        << r.plan.times.spatial_ms << "," << r.plan.times.check_ms << ","
-        << r.plan.times.temporal_ms << "," << r.plan.times.total_ms << ","
-        << r.plan.spatial.iterations.size() << "," << r.plan.path_length << ","
-        << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0)
-        << "," << baseline << "," << r.plan.min_interior_speed << "," << r.plan.min_curvature_radius << "\n";
+    csv << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << "," << ToString(r.plan.status)
+        << "," << r.plan.spatial_attempts << "," << r.plan.curve.num_pieces() << "," << r.plan.times.search_ms << ","
+        << r.plan.times.spatial_ms << "," << r.plan.times.check_ms << "," << r.plan.times.temporal_ms << ","
+        << r.plan.times.total_ms << "," << r.plan.spatial.iterations.size() << "," << r.plan.path_length << ","
+        << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0) << "," << baseline
+        << "," << r.plan.min_interior_speed << "," << r.plan.min_curvature_radius << "\n";
   }
 
   // Convergence records (paper Fig. 4): the last spatial attempt's iterations, cost relative to
   // the initial cost, against solver time.
-  const std::string iterations_path =
-      out.size() > 4 && out.substr(out.size() - 4) == ".csv"
-          ? out.substr(0, out.size() - 4) + "_iterations.csv"
-          : out + "_iterations.csv";
+  const std::string iterations_path = out.size() > 4 && out.substr(out.size() - 4) == ".csv"
+                                          ? out.substr(0, out.size() - 4) + "_iterations.csv"
+                                          : out + "_iterations.csv";
   std::ofstream iters(iterations_path);
   iters << "# spatial optimizer iterations of every plan in " << out << "\n";
   iters << "radius,formulation,map_id,trial,iteration,time_ms,cost,relative_cost,step_accepted\n";
@@ -172,9 +168,9 @@ int main(int argc, char** argv) {
     if (its.empty()) continue;
     const double initial = its.front().cost > 0.0 ? its.front().cost : 1.0;
     for (const SpatialIteration& it : its) {
-      iters << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << ","
-            << it.iteration << "," << it.time_seconds * 1e3 << "," << it.cost << ","
-            << it.cost / initial << "," << (it.step_accepted ? 1 : 0) << "\n";
+      iters << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << "," << it.iteration << ","
+            << it.time_seconds * 1e3 << "," << it.cost << "," << it.cost / initial << "," << (it.step_accepted ? 1 : 0)
+            << "\n";
     }
   }
   // Median relative cost reached within given solver times (the paper's "cost reduction in a
@@ -211,8 +207,7 @@ int main(int argc, char** argv) {
       std::cout << "| " << radius << " | " << ToString(f);
       for (int q = 0; q < 5; ++q) std::cout << " | " << std::setprecision(3) << Percentile(at[q], 0.5);
       std::cout << " | " << Percentile(settle_ms, 0.5) << " / " << Percentile(settle_ms, 0.95) << " | "
-                << Percentile(iteration_counts, 0.5) << " / " << Percentile(iteration_counts, 0.95)
-                << " |\n";
+                << Percentile(iteration_counts, 0.5) << " / " << Percentile(iteration_counts, 0.95) << " |\n";
     }
   }
   std::cout << "\n";
@@ -223,8 +218,7 @@ int main(int argc, char** argv) {
   for (double radius : radii) {
     PlotPanel panel;
     std::ostringstream title;
-    title << "spatial optimizer convergence on forest_gen pairs, robot radius " << radius
-          << " m (median over plans)";
+    title << "spatial optimizer convergence on forest_gen pairs, robot radius " << radius << " m (median over plans)";
     panel.title = title.str();
     panel.x_label = "solver time (ms)";
     panel.y_label = "cost / initial cost";
@@ -295,9 +289,9 @@ int main(int argc, char** argv) {
         s << std::fixed << std::setprecision(2) << Percentile(v, 0.5) << " / " << Percentile(v, 0.95);
         return s.str();
       };
-      std::cout << "| " << radius << " | " << ToString(f) << " | " << ok << "/" << n << " | "
-                << fail.str() << " | " << mp(search) << " | " << mp(spatial) << " | " << mp(check)
-                << " | " << mp(temporal) << " | " << mp(total) << " | " << mp(duration) << " |\n";
+      std::cout << "| " << radius << " | " << ToString(f) << " | " << ok << "/" << n << " | " << fail.str() << " | "
+                << mp(search) << " | " << mp(spatial) << " | " << mp(check) << " | " << mp(temporal) << " | "
+                << mp(total) << " | " << mp(duration) << " |\n";
     }
   }
   std::cout << "\nrows: " << out << ", iterations: " << iterations_path << "\n";

@@ -8,9 +8,7 @@ namespace timeopt::experiments {
 
 inline Waypoints SharpTurn() {
   Waypoints w(3, 7);
-  w << 0, 4, 8, 9.5, 8, 4, 0,
-       0, 0, 0, 0.8, 1.6, 1.6, 1.6,
-       1, 1, 1, 1, 1, 1, 1;
+  w << 0, 4, 8, 9.5, 8, 4, 0, 0, 0, 0, 0.8, 1.6, 1.6, 1.6, 1, 1, 1, 1, 1, 1, 1;
   return w;
 }
 

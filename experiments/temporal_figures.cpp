@@ -53,8 +53,7 @@ TemporalProblem MakeProblem(const PiecewiseCurve& curve, int K, double rho) {
 // Heuristic allocation: every piece gets the same duration h (so the curve, C4 in s, stays C4 in
 // time), the smallest h for which velocity and acceleration limits hold everywhere (checked on
 // 201 samples per piece). This is the uniform time scaling many planners apply after fitting.
-double HeuristicTime(const PiecewiseCurve& curve, const TemporalLimits& limits,
-                     std::vector<double>* durations) {
+double HeuristicTime(const PiecewiseCurve& curve, const TemporalLimits& limits, std::vector<double>* durations) {
   const int m = curve.num_pieces();
   std::vector<double> h(m, 1.0);
   // With durations h_i: v = f'/h, a = f''/h^2. Scaling all by k: v/k, a/k^2.
@@ -78,8 +77,7 @@ double HeuristicTime(const PiecewiseCurve& curve, const TemporalLimits& limits,
 }
 
 struct Csv {
-  explicit Csv(const std::filesystem::path& path, const std::string& conditions,
-               const std::string& header)
+  explicit Csv(const std::filesystem::path& path, const std::string& conditions, const std::string& header)
       : out(path) {
     if (!out) throw std::runtime_error("cannot write " + path.string());
     out << "# " << conditions << "\n" << header << "\n";
@@ -108,15 +106,19 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(dir);
   const auto socp = MakeSocpTemporalSolver();
   const auto ipopt = MakeIpoptTemporalSolver();
-  const std::array<double, 3> kColors[6] = {{0.1, 0.1, 0.1}, {0.85, 0.2, 0.15}, {0.15, 0.6, 0.2},
-                                             {0.15, 0.3, 0.85}, {0.7, 0.4, 0.0}, {0.6, 0.1, 0.6}};
+  const std::array<double, 3> kColors[6] = {{0.1, 0.1, 0.1},   {0.85, 0.2, 0.15}, {0.15, 0.6, 0.2},
+                                            {0.15, 0.3, 0.85}, {0.7, 0.4, 0.0},   {0.6, 0.1, 0.6}};
 
   // ---- 1. optimal vs heuristic allocation ----
   {
     Csv csv(dir / "allocation.csv", "vmax 3 m/s, amax 2 m/s^2 per axis, K 50, rho 0, paper rows, rest to rest",
             "case,pieces,optimal_T,heuristic_T,ratio");
-    PlotPanel panel{"speed along the sharp-turn course: optimal vs heuristic allocation", "t [s]", "|v| [m/s]", {}, false};
-    struct Case { std::string name; Waypoints w; };
+    PlotPanel panel{
+        "speed along the sharp-turn course: optimal vs heuristic allocation", "t [s]", "|v| [m/s]", {}, false};
+    struct Case {
+      std::string name;
+      Waypoints w;
+    };
     std::vector<Case> cases = {{"sharp_turn", SharpTurn()}};
     for (unsigned seed = 1; seed <= 5; ++seed) cases.push_back({"random_" + std::to_string(seed), RandomWalk(9, seed)});
     for (const Case& c : cases) {
@@ -125,12 +127,15 @@ int main(int argc, char** argv) {
       const TemporalResult r = socp->Solve(p);
       std::vector<double> h;
       const double heuristic = HeuristicTime(curve, p.limits, &h);
-      csv.out << c.name << "," << curve.num_pieces() << "," << (r.is_success() ? r.total_time : NAN) << ","
-              << heuristic << "," << heuristic / r.total_time << "\n";
+      csv.out << c.name << "," << curve.num_pieces() << "," << (r.is_success() ? r.total_time : NAN) << "," << heuristic
+              << "," << heuristic / r.total_time << "\n";
       if (c.name == "sharp_turn" && r.is_success()) {
         const Trajectory traj(curve, r.profile);
         PlotSeries opt{"optimal (SOCP)", {}, {}, kColors[1], false};
-        for (const auto& s : traj.Sample(200.0)) { opt.x.push_back(s.t); opt.y.push_back(s.velocity.norm()); }
+        for (const auto& s : traj.Sample(200.0)) {
+          opt.x.push_back(s.t);
+          opt.y.push_back(s.velocity.norm());
+        }
         PlotSeries heu{"uniform time scaling", {}, {}, kColors[3], false};
         double t0 = 0.0;
         for (int i = 0; i < curve.num_pieces(); ++i) {
@@ -156,7 +161,10 @@ int main(int argc, char** argv) {
     int color = 0;
     for (double rho : {0.0, 1.0, 10.0, 100.0}) {
       const TemporalResult r = socp->Solve(MakeProblem(turn, 50, rho));
-      if (!r.is_success()) { csv.out << rho << ",nan,nan," << r.iterations << "\n"; continue; }
+      if (!r.is_success()) {
+        csv.out << rho << ",nan,nan," << r.iterations << "\n";
+        continue;
+      }
       double energy = 0.0;
       for (int i = 0; i < r.profile.num_pieces(); ++i)
         for (int k = 0; k < r.profile.cells_per_piece(); ++k) energy += std::pow(r.profile.a(i, k), 2) * r.profile.ds();
@@ -164,8 +172,10 @@ int main(int argc, char** argv) {
       const Trajectory traj(turn, r.profile);
       PlotSeries sv{"rho " + std::to_string(static_cast<int>(rho)), {}, {}, kColors[color], false}, sa = sv;
       for (const auto& s : traj.Sample(200.0)) {
-        sv.x.push_back(s.t); sv.y.push_back(s.velocity.norm());
-        sa.x.push_back(s.t); sa.y.push_back(s.acceleration.norm());
+        sv.x.push_back(s.t);
+        sv.y.push_back(s.velocity.norm());
+        sa.x.push_back(s.t);
+        sa.y.push_back(s.acceleration.norm());
       }
       speed.series.push_back(sv);
       acc.series.push_back(sa);
@@ -185,9 +195,12 @@ int main(int argc, char** argv) {
         r = socp->Solve(MakeProblem(turn, K, 0.0));
         times.push_back(r.solve_time_seconds * 1e3);
       }
-      csv.out << K << "," << (r.is_success() ? r.total_time : NAN) << "," << r.iterations << ","
-              << Median(times) << "," << r.max_acceleration_ratio << "\n";
-      if (r.is_success()) { series.x.push_back(K); series.y.push_back(r.total_time); }
+      csv.out << K << "," << (r.is_success() ? r.total_time : NAN) << "," << r.iterations << "," << Median(times) << ","
+              << r.max_acceleration_ratio << "\n";
+      if (r.is_success()) {
+        series.x.push_back(K);
+        series.y.push_back(r.total_time);
+      }
     }
     tk.series.push_back(series);
     WritePlotPng({tk}, (dir / "k_sweep.png").string());
@@ -196,8 +209,8 @@ int main(int argc, char** argv) {
   // ---- 4. solve times against size ----
   {
     Csv csv(dir / "solve_times.csv",
-            "random-walk natural cubics, vmax 3, amax 2, rho 0, paper rows; median of " +
-                std::to_string(repetitions) + " solves (Ipopt: of 3)",
+            "random-walk natural cubics, vmax 3, amax 2, rho 0, paper rows; median of " + std::to_string(repetitions) +
+                " solves (Ipopt: of 3)",
             "pieces,K,cells,socp_ms,socp_iterations,ipopt_ms,ipopt_iterations,T_socp,T_ipopt");
     PlotPanel panel{"solve time against cells N = m K", "cells", "median solve time [ms] (log)", {}, true};
     PlotSeries s_socp{"SOCP (ours)", {}, {}, kColors[1], false}, s_ipopt{"Ipopt", {}, {}, kColors[3], false};
@@ -206,12 +219,20 @@ int main(int argc, char** argv) {
         const TemporalProblem p = MakeProblem(NaturalCubicSpline(RandomWalk(m + 1, 99)), K, 0.0);
         std::vector<double> ts, ti;
         TemporalResult a, b;
-        for (int rep = 0; rep < repetitions; ++rep) { a = socp->Solve(p); ts.push_back(a.solve_time_seconds * 1e3); }
-        for (int rep = 0; rep < 3; ++rep) { b = ipopt->Solve(p); ti.push_back(b.solve_time_seconds * 1e3); }
-        csv.out << m << "," << K << "," << m * K << "," << Median(ts) << "," << a.iterations << ","
-                << Median(ti) << "," << b.iterations << "," << a.total_time << "," << b.total_time << "\n";
-        s_socp.x.push_back(m * K); s_socp.y.push_back(Median(ts));
-        s_ipopt.x.push_back(m * K); s_ipopt.y.push_back(Median(ti));
+        for (int rep = 0; rep < repetitions; ++rep) {
+          a = socp->Solve(p);
+          ts.push_back(a.solve_time_seconds * 1e3);
+        }
+        for (int rep = 0; rep < 3; ++rep) {
+          b = ipopt->Solve(p);
+          ti.push_back(b.solve_time_seconds * 1e3);
+        }
+        csv.out << m << "," << K << "," << m * K << "," << Median(ts) << "," << a.iterations << "," << Median(ti) << ","
+                << b.iterations << "," << a.total_time << "," << b.total_time << "\n";
+        s_socp.x.push_back(m * K);
+        s_socp.y.push_back(Median(ts));
+        s_ipopt.x.push_back(m * K);
+        s_ipopt.y.push_back(Median(ti));
       }
     }
     // Sort by cells for a clean line.
@@ -220,7 +241,10 @@ int main(int argc, char** argv) {
       for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
       std::sort(idx.begin(), idx.end(), [&](size_t a, size_t b) { return s->x[a] < s->x[b]; });
       PlotSeries sorted = *s;
-      for (size_t i = 0; i < idx.size(); ++i) { sorted.x[i] = s->x[idx[i]]; sorted.y[i] = s->y[idx[i]]; }
+      for (size_t i = 0; i < idx.size(); ++i) {
+        sorted.x[i] = s->x[idx[i]];
+        sorted.y[i] = s->y[idx[i]];
+      }
       *s = sorted;
     }
     panel.series = {s_socp, s_ipopt};

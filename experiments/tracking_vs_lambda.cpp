@@ -75,8 +75,8 @@ int main(int argc, char** argv) {
   csv.precision(10);
   const auto solver = MakeSocpTemporalSolver();
   PlotPanel time_panel{"minimum time T", "log10 lambda_a (m/s^2 per cell)", "T (s)", {}};
-  PlotPanel acc_panel{"flown max |a| / amax (dashed: without lambda_a)", "log10 lambda_a (m/s^2 per cell)",
-                      "ratio", {}};
+  PlotPanel acc_panel{
+      "flown max |a| / amax (dashed: without lambda_a)", "log10 lambda_a (m/s^2 per cell)", "ratio", {}};
   const std::array<std::array<double, 3>, 5> colors = {
       {{0.1, 0.3, 0.8}, {0.8, 0.2, 0.1}, {0.1, 0.6, 0.2}, {0.6, 0.3, 0.7}, {0.9, 0.6, 0.0}}};
   for (size_t c = 0; c < curves.size(); ++c) {
@@ -93,24 +93,27 @@ int main(int argc, char** argv) {
       p.constraint_mode = ConstraintMode::kCertified;
       const TemporalResult r = solver->Solve(p);
       csv << curves[c].name << ",";
-      if (lambda) csv << *lambda;
-      else csv << "none";
+      if (lambda)
+        csv << *lambda;
+      else
+        csv << "none";
       csv << "," << ToString(r.status);
       if (!r.is_success()) {
         csv << ",,,,,\n";
         std::cerr << curves[c].name << " lambda " << (lambda ? *lambda : 0.0) << ": " << r.message << "\n";
         continue;
       }
-      const FeasibilityReport f = sim.Fly(Trajectory(p.curve, r.profile), p.limits,
-                                              p.boundary.start_velocity, p.boundary.start_acceleration);
+      const FeasibilityReport f =
+          sim.Fly(Trajectory(p.curve, r.profile), p.limits, p.boundary.start_velocity, p.boundary.start_acceleration);
       csv << "," << r.total_time << "," << r.max_acceleration_ratio << "," << f.max_velocity_ratio << ","
           << f.max_acceleration_ratio << "," << (f.feasible ? 1 : 0) << "\n";
       std::cout << curves[c].name << " lambda_a ";
-      if (lambda) std::cout << *lambda;
-      else std::cout << "none";
-      std::cout << ": T " << r.total_time << " s, flown max |v|/vmax " << f.max_velocity_ratio
-                << ", max |a|/amax " << f.max_acceleration_ratio << (f.feasible ? " (limits hold)" : "")
-                << "\n";
+      if (lambda)
+        std::cout << *lambda;
+      else
+        std::cout << "none";
+      std::cout << ": T " << r.total_time << " s, flown max |v|/vmax " << f.max_velocity_ratio << ", max |a|/amax "
+                << f.max_acceleration_ratio << (f.feasible ? " (limits hold)" : "") << "\n";
       if (!lambda) {
         unbounded_acc = f.max_acceleration_ratio;
         continue;
@@ -121,15 +124,15 @@ int main(int argc, char** argv) {
       a_series.y.push_back(f.max_acceleration_ratio);
     }
     if (!a_series.x.empty()) {
-      PlotSeries flat{"", {a_series.x.front(), a_series.x.back()}, {unbounded_acc, unbounded_acc},
-                      colors[c % colors.size()], true};
+      PlotSeries flat{
+          "", {a_series.x.front(), a_series.x.back()}, {unbounded_acc, unbounded_acc}, colors[c % colors.size()], true};
       acc_panel.series.push_back(flat);
     }
     time_panel.series.push_back(t_series);
     acc_panel.series.push_back(a_series);
   }
-  PlotSeries one{"limit", {std::log10(lambdas.back().value()), std::log10(lambdas[1].value())}, {1.0, 1.0},
-                 {0.0, 0.0, 0.0}, true};
+  PlotSeries one{
+      "limit", {std::log10(lambdas.back().value()), std::log10(lambdas[1].value())}, {1.0, 1.0}, {0.0, 0.0, 0.0}, true};
   acc_panel.series.push_back(one);
   const std::filesystem::path png = std::filesystem::path(out_dir) / "tracking_vs_lambda.png";
   WritePlotPng({time_panel, acc_panel}, png.string());

@@ -94,7 +94,8 @@ conic::Solver::Options ConicOptionsFrom(const py::kwargs& kwargs) {
     } else if (key == "max_solve_time") {
       o.max_solve_time_in_seconds = item.second.cast<double>();
     } else {
-      throw py::type_error("conic.solve: unknown keyword '" + key + "' (expected tolerance, max_iterations, max_solve_time)");
+      throw py::type_error("conic.solve: unknown keyword '" + key +
+                           "' (expected tolerance, max_iterations, max_solve_time)");
     }
   }
   std::string error;
@@ -152,7 +153,8 @@ void BindConic(py::module_& m) {
           py::array_t<double> data(csc.nonZeros(), csc.valuePtr());
           py::array_t<int> indices(csc.nonZeros(), csc.innerIndexPtr());
           py::array_t<int> indptr(csc.cols() + 1, csc.outerIndexPtr());
-          return sparse.attr("csc_matrix")(py::make_tuple(data, indices, indptr), py::make_tuple(csc.rows(), csc.cols()));
+          return sparse.attr("csc_matrix")(py::make_tuple(data, indices, indptr),
+                                           py::make_tuple(csc.rows(), csc.cols()));
         };
         py::dict out;
         out["c"] = ToArray(p.c);
@@ -177,7 +179,6 @@ void BindConic(py::module_& m) {
       },
       py::arg("path"), py::arg("c"), py::arg("G"), py::arg("h"), py::arg("A") = py::none(), py::arg("b") = py::none(),
       py::arg("cones") = py::dict(), "Writes the problem of conic.solve's arguments as a CBF file.");
-
 }
 
 }  // namespace timeopt::python

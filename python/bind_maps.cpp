@@ -47,7 +47,8 @@ void BindMaps(py::module_& m) {
           "load",
           [](const std::string& path, const std::string& unknown) {
             UnknownSpace u;
-            if (!FromString(unknown, &u)) throw py::value_error("unknown: expected 'free' or 'occupied', got '" + unknown + "'");
+            if (!FromString(unknown, &u))
+              throw py::value_error("unknown: expected 'free' or 'occupied', got '" + unknown + "'");
             return OccupancyMap::Load(path, u);
           },
           py::arg("path"), py::arg("unknown") = "free")
@@ -55,7 +56,8 @@ void BindMaps(py::module_& m) {
       .def_property_readonly("bounds",
                              [](const OccupancyMap& map) {
                                const Eigen::AlignedBox3d b = map.Bounds();
-                               return py::make_tuple(ToArray(Eigen::Vector3d(b.min())), ToArray(Eigen::Vector3d(b.max())));
+                               return py::make_tuple(ToArray(Eigen::Vector3d(b.min())),
+                                                     ToArray(Eigen::Vector3d(b.max())));
                              })
       .def(
           "is_occupied",
@@ -100,12 +102,14 @@ void BindMaps(py::module_& m) {
           "from_map",
           [](const OccupancyMap& map, const py::object& box_min, const py::object& box_max, double max_memory_mb) {
             std::optional<Eigen::AlignedBox3d> box;
-            if (!box_min.is_none() || !box_max.is_none()) box = Eigen::AlignedBox3d(Vec3(box_min, "box_min"), Vec3(box_max, "box_max"));
+            if (!box_min.is_none() || !box_max.is_none())
+              box = Eigen::AlignedBox3d(Vec3(box_min, "box_min"), Vec3(box_max, "box_max"));
             const int64_t budget = BudgetBytes(max_memory_mb);
             py::gil_scoped_release release;
             return Esdf::FromMap(map, box, budget);
           },
-          py::arg("map"), py::arg("box_min") = py::none(), py::arg("box_max") = py::none(), py::arg("max_memory_mb") = 0.0,
+          py::arg("map"), py::arg("box_min") = py::none(), py::arg("box_max") = py::none(),
+          py::arg("max_memory_mb") = 0.0,
           "The field over the map's known box, or over [box_min, box_max]. max_memory_mb > 0: a budget for its\n"
           "peak memory (9 bytes per voxel), refused with ValueError before allocating. Releases the GIL.")
       .def_property_readonly("resolution", &Esdf::resolution)
@@ -136,7 +140,6 @@ void BindMaps(py::module_& m) {
             return py::make_tuple(ToArray(d), ToRows(g));
           },
           py::arg("points"), "(distances (N,), gradients (N, 3)) at (N, 3) points.");
-
 }
 
 }  // namespace timeopt::python

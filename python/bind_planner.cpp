@@ -76,11 +76,12 @@ PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margi
     } else if (key == "max_memory_mb") {
       *max_memory_mb = value.cast<double>();
     } else {
-      throw py::type_error("plan: unknown keyword '" + key +
-                           "' (expected config, max_velocity, max_acceleration, max_jerk, max_speed, "
-                           "max_acceleration_norm, max_thrust, min_thrust, max_tilt, robot_radius, safety_margin, K, "
-                           "constraint_mode, start_velocity, start_acceleration, max_attempts, region_margin, whole_map, "
-                           "max_memory_mb)");
+      throw py::type_error(
+          "plan: unknown keyword '" + key +
+          "' (expected config, max_velocity, max_acceleration, max_jerk, max_speed, "
+          "max_acceleration_norm, max_thrust, min_thrust, max_tilt, robot_radius, safety_margin, K, "
+          "constraint_mode, start_velocity, start_acceleration, max_attempts, region_margin, whole_map, "
+          "max_memory_mb)");
     }
   }
   std::string error;
@@ -92,7 +93,8 @@ PlannerOptions PlannerOptionsFrom(const py::kwargs& kwargs, double* region_margi
 
 void BindPlanner(py::module_& m) {
   // ---- planning ----
-  py::class_<PlanResult>(m, "PlanResult", "A plan: status, the spatial curve, the temporal result and the stages' figures.")
+  py::class_<PlanResult>(m, "PlanResult",
+                         "A plan: status, the spatial curve, the temporal result and the stages' figures.")
       .def_readonly("status", &PlanResult::status)
       .def_readonly("message", &PlanResult::message)
       .def_readonly("curve", &PlanResult::curve)
@@ -108,19 +110,21 @@ void BindPlanner(py::module_& m) {
       .def(
           "trajectory",
           [](const PlanResult& r) {
-            if (!r.is_success()) throw py::value_error(std::string("PlanResult.trajectory: the plan is ") + ToString(r.status));
+            if (!r.is_success())
+              throw py::value_error(std::string("PlanResult.trajectory: the plan is ") + ToString(r.status));
             return Trajectory(r.curve, r.temporal.profile);
           },
           "The planned trajectory (successful plans only).")
       .def(
-          "summary",
-          [](const PlanResult& r) { return py::module_::import("json").attr("loads")(PlanResultToJson(r)); },
+          "summary", [](const PlanResult& r) { return py::module_::import("json").attr("loads")(PlanResultToJson(r)); },
           "The plan's summary as a dict (the plan's own keys of `timeopt plan`'s JSON).")
-      .def("to_json", [](const PlanResult& r) { return PlanResultToJson(r); }, "The plan's summary as JSON text.")
+      .def(
+          "to_json", [](const PlanResult& r) { return PlanResultToJson(r); }, "The plan's summary as JSON text.")
       .def(
           "to_html",
           [](const PlanResult& r, const std::string& path, const OccupancyMap* map, const VehicleLimits* limits) {
-            if (!r.is_success()) throw py::value_error(std::string("PlanResult.to_html: the plan is ") + ToString(r.status));
+            if (!r.is_success())
+              throw py::value_error(std::string("PlanResult.to_html: the plan is ") + ToString(r.status));
             const VehicleLimits drawn = limits != nullptr ? *limits : PlannerOptions().limits;
             PlanPageOptions page;
             page.title = "timeopt plan";
@@ -128,7 +132,9 @@ void BindPlanner(py::module_& m) {
             T << r.temporal.total_time << " s";
             length << r.path_length << " m";
             clearance << r.min_clearance << " m";
-            page.summary = {{"T", T.str()}, {"status", ToString(r.status)}, {"path length", length.str()},
+            page.summary = {{"T", T.str()},
+                            {"status", ToString(r.status)},
+                            {"path length", length.str()},
                             {"clearance", clearance.str()},
                             {"profile", r.temporal.profile.jerk_limited() ? "jerk-limited" : "without a jerk limit"}};
             WritePlanPageHtml(Trajectory(r.curve, r.temporal.profile), drawn, map, path, page);
@@ -140,7 +146,8 @@ void BindPlanner(py::module_& m) {
       .def("__repr__", [](const PlanResult& r) {
         std::ostringstream s;
         s << "<PlanResult " << ToString(r.status);
-        if (r.is_success()) s << " T=" << r.temporal.total_time << " s, " << r.path_length << " m, " << r.curve.num_pieces() << " pieces";
+        if (r.is_success())
+          s << " T=" << r.temporal.total_time << " s, " << r.path_length << " m, " << r.curve.num_pieces() << " pieces";
         s << ">";
         return s.str();
       });
@@ -176,9 +183,11 @@ void BindPlanner(py::module_& m) {
       "for the field's peak memory; 0, the default: none). Releases the GIL.");
 
   // ---- simulation ----
-  py::class_<FeasibilityReport>(m, "FlightReport", "A simulated flight: whether every limit held, and the largest ratios.")
+  py::class_<FeasibilityReport>(m, "FlightReport",
+                                "A simulated flight: whether every limit held, and the largest ratios.")
       .def_readonly("feasible", &FeasibilityReport::feasible)
-      .def_readonly("tolerance", &FeasibilityReport::tolerance, "The verdict's relative slack: 0.01 with a jerk limit, 1e-9 without, unless given.")
+      .def_readonly("tolerance", &FeasibilityReport::tolerance,
+                    "The verdict's relative slack: 0.01 with a jerk limit, 1e-9 without, unless given.")
       .def_readonly("message", &FeasibilityReport::message)
       .def_readonly("max_velocity_ratio", &FeasibilityReport::max_velocity_ratio)
       .def_readonly("max_acceleration_ratio", &FeasibilityReport::max_acceleration_ratio)
@@ -214,7 +223,6 @@ void BindPlanner(py::module_& m) {
       "Flies the trajectory with the simulated jerk-input quadrotor and checks the limits in continuous time. "
       "tolerance: the verdict's relative slack; None: 0.01 when limits has a jerk limit (the product's flight "
       "criterion, as timeopt plan, waypoints and simulate), 1e-9 otherwise.");
-
 }
 
 }  // namespace timeopt::python

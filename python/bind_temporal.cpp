@@ -83,10 +83,11 @@ TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& s
 
 void BindTemporal(py::module_& m) {
   // ---- limits ----
-  py::class_<VehicleLimits>(m, "Limits",
-                            "Vehicle limits: per-axis max_velocity and max_acceleration (m/s, m/s^2; +inf for none), "
-                            "optional per-axis max_jerk, and the quadrotor's max_speed, max_acceleration_norm, max_thrust, "
-                            "min_thrust (m/s^2), max_tilt (rad), gravity.")
+  py::class_<VehicleLimits>(
+      m, "Limits",
+      "Vehicle limits: per-axis max_velocity and max_acceleration (m/s, m/s^2; +inf for none), "
+      "optional per-axis max_jerk, and the quadrotor's max_speed, max_acceleration_norm, max_thrust, "
+      "min_thrust (m/s^2), max_tilt (rad), gravity.")
       .def(py::init([](const py::kwargs& kwargs) {
              VehicleLimits l = FlightLimits();
              for (const auto& item : kwargs) SetLimit(&l, item.first.cast<std::string>(), item.second);
@@ -101,7 +102,10 @@ void BindTemporal(py::module_& m) {
           "max_acceleration", [](const VehicleLimits& l) { return ToArray(l.max_acceleration); },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_acceleration", v); })
       .def_property(
-          "max_jerk", [](const VehicleLimits& l) -> py::object { return l.max_jerk ? py::object(ToArray(*l.max_jerk)) : py::none(); },
+          "max_jerk",
+          [](const VehicleLimits& l) -> py::object {
+            return l.max_jerk ? py::object(ToArray(*l.max_jerk)) : py::none();
+          },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_jerk", v); })
       .def_readwrite("max_speed", &VehicleLimits::max_speed)
       .def_readwrite("max_acceleration_norm", &VehicleLimits::max_acceleration_norm)
@@ -112,14 +116,18 @@ void BindTemporal(py::module_& m) {
       .def(py::pickle(&pickle_state::LimitsState, &pickle_state::LimitsFromState))
       .def("__repr__", [](const VehicleLimits& l) {
         std::ostringstream s;
-        const auto axes = [&s](const Eigen::Vector3d& v) { s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]"; };
+        const auto axes = [&s](const Eigen::Vector3d& v) {
+          s << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+        };
         s << "Limits(max_velocity=";
         axes(l.max_velocity);
         s << ", max_acceleration=";
         axes(l.max_acceleration);
         s << ", max_jerk=";
-        if (l.max_jerk) axes(*l.max_jerk);
-        else s << "None";
+        if (l.max_jerk)
+          axes(*l.max_jerk);
+        else
+          s << "None";
         const auto optional = [&s](const char* name, const std::optional<double>& v) {
           if (v) s << ", " << name << "=" << *v;
         };
@@ -141,7 +149,8 @@ void BindTemporal(py::module_& m) {
                const auto a = AsDoubles(piece, "pieces[i]");
                if (a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) < 1) {
                  throw py::value_error("pieces[" + std::to_string(out.size()) +
-                                       "]: expected a (3, degree + 1) array of monomial coefficients, got shape " + ShapeText(a));
+                                       "]: expected a (3, degree + 1) array of monomial coefficients, got shape " +
+                                       ShapeText(a));
                }
                PolynomialPiece::Coefficients c(3, a.shape(1));
                for (py::ssize_t k = 0; k < a.shape(1); ++k) {
@@ -151,7 +160,8 @@ void BindTemporal(py::module_& m) {
              }
              return PiecewiseCurve(std::move(out));
            }),
-           py::arg("pieces"), "Curve(pieces): a list of (3, degree + 1) arrays, row r = axis, column k = coefficient of s^k.")
+           py::arg("pieces"),
+           "Curve(pieces): a list of (3, degree + 1) arrays, row r = axis, column k = coefficient of s^k.")
       .def_static(
           "from_waypoints",
           [](const py::handle& waypoints, const std::string& kind) {
@@ -195,17 +205,21 @@ void BindTemporal(py::module_& m) {
           },
           py::arg("sigma"), py::arg("derivative") = 0,
           "f or its derivative in s at global parameters sigma in [0, num_pieces] (piece floor(sigma)): (N, 3).")
-      .def("arc_length", [](const PiecewiseCurve& c) { return c.ArcLength(); }, "Arc length, metres.")
-      .def("to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.")
+      .def(
+          "arc_length", [](const PiecewiseCurve& c) { return c.ArcLength(); }, "Arc length, metres.")
+      .def(
+          "to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.")
       .def(py::pickle(&pickle_state::CurveState, &pickle_state::CurveFromState));
 
   // ---- temporal problem ----
-  py::class_<TemporalProblem>(m, "TemporalProblem",
-                              "The temporal problem (docs/temporal.md): a curve, limits, boundary velocities and accelerations, "
-                              "K cells per piece, the constraint mode and rho.")
-      .def(py::init([](const PiecewiseCurve& curve, const VehicleLimits& limits, const py::object& K, const std::string& mode, double rho,
-                       const py::object& start_velocity, const py::object& end_velocity,
-                       const py::object& start_acceleration, const py::object& end_acceleration, bool relax_boundary) {
+  py::class_<TemporalProblem>(
+      m, "TemporalProblem",
+      "The temporal problem (docs/temporal.md): a curve, limits, boundary velocities and accelerations, "
+      "K cells per piece, the constraint mode and rho.")
+      .def(py::init([](const PiecewiseCurve& curve, const VehicleLimits& limits, const py::object& K,
+                       const std::string& mode, double rho, const py::object& start_velocity,
+                       const py::object& end_velocity, const py::object& start_acceleration,
+                       const py::object& end_acceleration, bool relax_boundary) {
              TemporalProblem p;
              p.curve = curve;
              p.limits = limits;
@@ -214,15 +228,17 @@ void BindTemporal(py::module_& m) {
              p.rho = rho;
              if (!start_velocity.is_none()) p.boundary.start_velocity = Vec3(start_velocity, "start_velocity");
              if (!end_velocity.is_none()) p.boundary.end_velocity = Vec3(end_velocity, "end_velocity");
-             if (!start_acceleration.is_none()) p.boundary.start_acceleration = Vec3(start_acceleration, "start_acceleration");
+             if (!start_acceleration.is_none())
+               p.boundary.start_acceleration = Vec3(start_acceleration, "start_acceleration");
              if (!end_acceleration.is_none()) p.boundary.end_acceleration = Vec3(end_acceleration, "end_acceleration");
              p.relax_boundary = relax_boundary;
              return p;
            }),
            py::arg("curve"), py::arg("limits") = FlightLimits(), py::kw_only(), py::arg("K") = 50,
-           py::arg("constraint_mode") = ToString(kFlightConstraintMode), py::arg("rho") = 0.0, py::arg("start_velocity") = py::none(),
-           py::arg("end_velocity") = py::none(), py::arg("start_acceleration") = py::none(),
-           py::arg("end_acceleration") = py::none(), py::arg("relax_boundary") = false)
+           py::arg("constraint_mode") = ToString(kFlightConstraintMode), py::arg("rho") = 0.0,
+           py::arg("start_velocity") = py::none(), py::arg("end_velocity") = py::none(),
+           py::arg("start_acceleration") = py::none(), py::arg("end_acceleration") = py::none(),
+           py::arg("relax_boundary") = false)
       .def_readwrite("curve", &TemporalProblem::curve)
       .def_readwrite("limits", &TemporalProblem::limits)
       .def_property(
@@ -239,14 +255,17 @@ void BindTemporal(py::module_& m) {
           [](TemporalProblem& p, const py::handle& v) { p.boundary.end_velocity = Vec3(v, "end_velocity"); })
       .def_property(
           "start_acceleration", [](const TemporalProblem& p) { return ToArray(p.boundary.start_acceleration); },
-          [](TemporalProblem& p, const py::handle& v) { p.boundary.start_acceleration = Vec3(v, "start_acceleration"); })
+          [](TemporalProblem& p, const py::handle& v) {
+            p.boundary.start_acceleration = Vec3(v, "start_acceleration");
+          })
       .def_property(
           "end_acceleration", [](const TemporalProblem& p) { return ToArray(p.boundary.end_acceleration); },
           [](TemporalProblem& p, const py::handle& v) { p.boundary.end_acceleration = Vec3(v, "end_acceleration"); })
       .def("validate", &TemporalProblem::Validate, "Raises ValueError naming the first bad field.")
       .def(py::pickle(&pickle_state::ProblemState, &pickle_state::ProblemFromState));
 
-  m.def("load_problem", &ReadTemporalProblemJson, py::arg("path"), "Reads a problem JSON file (docs/formats.md), as `timeopt temporal` does.");
+  m.def("load_problem", &ReadTemporalProblemJson, py::arg("path"),
+        "Reads a problem JSON file (docs/formats.md), as `timeopt temporal` does.");
   m.def(
       "parse_problem", [](const std::string& text) { return ParseTemporalProblemJson(text); }, py::arg("json_text"),
       "Parses problem JSON text.");
@@ -260,7 +279,8 @@ void BindTemporal(py::module_& m) {
       .def_property_readonly(
           "b",
           [](const TemporalProfile& p) {
-            py::array_t<double> out({static_cast<py::ssize_t>(p.num_pieces()), static_cast<py::ssize_t>(p.cells_per_piece() + 1)});
+            py::array_t<double> out(
+                {static_cast<py::ssize_t>(p.num_pieces()), static_cast<py::ssize_t>(p.cells_per_piece() + 1)});
             auto r = out.mutable_unchecked<2>();
             for (int i = 0; i < p.num_pieces(); ++i) {
               for (int k = 0; k <= p.cells_per_piece(); ++k) r(i, k) = p.b(i, k);
@@ -270,7 +290,8 @@ void BindTemporal(py::module_& m) {
           "b = sdot^2 at the grid points: (pieces, K + 1).")
       .def(py::pickle(&pickle_state::ProfileState, &pickle_state::ProfileFromState));
 
-  py::class_<TemporalResult>(m, "TemporalResult", "The answer of a temporal solve; usable when status is TemporalStatus.optimal.")
+  py::class_<TemporalResult>(m, "TemporalResult",
+                             "The answer of a temporal solve; usable when status is TemporalStatus.optimal.")
       .def_readonly("status", &TemporalResult::status)
       .def_readonly("message", &TemporalResult::message)
       .def_readonly("solver", &TemporalResult::solver)
@@ -319,7 +340,9 @@ void BindTemporal(py::module_& m) {
           "With relax_boundary on an infeasible problem: the given and flown boundary speeds (m/s), "
           "start_scale and what became of the start acceleration; or None.")
       .def("is_success", &TemporalResult::is_success)
-      .def("to_json", [](const TemporalResult& r) { return TemporalResultToJson(r); }, "The result JSON of `timeopt temporal`.")
+      .def(
+          "to_json", [](const TemporalResult& r) { return TemporalResultToJson(r); },
+          "The result JSON of `timeopt temporal`.")
       .def(py::pickle(&pickle_state::ResultState, &pickle_state::ResultFromState))
       .def("__repr__", [](const TemporalResult& r) {
         std::ostringstream s;
@@ -381,7 +404,6 @@ void BindTemporal(py::module_& m) {
           py::arg("problem"),
           "Solves, releasing the GIL; concurrent calls on one Solver run one after the other. ValueError before "
           "solving a problem above the Solver's max_memory_mb.");
-
 }
 
 }  // namespace timeopt::python

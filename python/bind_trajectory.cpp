@@ -68,13 +68,15 @@ void BindTrajectories(py::module_& m) {
   py::class_<Trajectory>(m, "Trajectory", "A curve traversed by a temporal profile: p, v, a, j against time.")
       .def(py::init([](const PiecewiseCurve& curve, const TemporalResult& result) {
              if (!result.is_success()) {
-               throw py::value_error(std::string("Trajectory: the result is ") + ToString(result.status) + ", not optimal");
+               throw py::value_error(std::string("Trajectory: the result is ") + ToString(result.status) +
+                                     ", not optimal");
              }
              return Trajectory(curve, result.profile);
            }),
            py::arg("curve"), py::arg("result"))
       .def_property_readonly("duration", &Trajectory::duration)
-      .def("sample", &Sample, py::arg("ts"), "(p, v, a, j) at the times ts, each an (N, 3) array; times clamp to [0, duration].")
+      .def("sample", &Sample, py::arg("ts"),
+           "(p, v, a, j) at the times ts, each an (N, 3) array; times clamp to [0, duration].")
       .def(
           "sample_rate",
           [](const Trajectory& t, double rate_hz) {
@@ -86,17 +88,21 @@ void BindTrajectories(py::module_& m) {
           py::arg("rate_hz"), "(ts, (p, v, a, j)) at rate_hz from 0, with the end.")
       .def(py::pickle([](const Trajectory& t) { return py::make_tuple("Trajectory", TrajectoryToJson(t, -1)); },
                       [](const py::tuple& state) {
-                        if (state.size() != 2 || !py::isinstance<py::str>(state[0]) || state[0].cast<std::string>() != "Trajectory") {
+                        if (state.size() != 2 || !py::isinstance<py::str>(state[0]) ||
+                            state[0].cast<std::string>() != "Trajectory") {
                           throw py::value_error("unpickling Trajectory: not a timeopt Trajectory state");
                         }
                         return ParseTrajectoryJson(state[1].cast<std::string>(), "pickled trajectory");
                       }))
       .def_static("load", &ReadTrajectoryJson, py::arg("path"),
                   "Reads a trajectory file (--trajectory of plan, temporal, waypoints; docs/formats.md).")
-      .def("save", [](const Trajectory& t, const std::string& path) { WriteTrajectoryJson(t, path); }, py::arg("path"),
-           "Writes the trajectory file: curve and profile, exact; load() gives back the same samples to the bit.")
-      .def("to_json", [](const Trajectory& t) { return TrajectoryToJson(t); }, "The trajectory file's JSON text.")
-      .def_static("from_json", [](const std::string& text) { return ParseTrajectoryJson(text); }, py::arg("text"))
+      .def(
+          "save", [](const Trajectory& t, const std::string& path) { WriteTrajectoryJson(t, path); }, py::arg("path"),
+          "Writes the trajectory file: curve and profile, exact; load() gives back the same samples to the bit.")
+      .def(
+          "to_json", [](const Trajectory& t) { return TrajectoryToJson(t); }, "The trajectory file's JSON text.")
+      .def_static(
+          "from_json", [](const std::string& text) { return ParseTrajectoryJson(text); }, py::arg("text"))
       .def(
           "to_html",
           [](const Trajectory& t, const std::string& path, const VehicleLimits* limits, const OccupancyMap* map,
@@ -115,14 +121,16 @@ void BindTrajectories(py::module_& m) {
                             {"profile", t.profile().jerk_limited() ? "jerk-limited" : "without a jerk limit"}};
             WritePlanPageHtml(t, drawn, map, path, page);
           },
-          py::arg("path"), py::arg("limits") = nullptr, py::arg("map") = nullptr, py::arg("title") = "timeopt trajectory",
+          py::arg("path"), py::arg("limits") = nullptr, py::arg("map") = nullptr,
+          py::arg("title") = "timeopt trajectory",
           "Writes the 3D page (one HTML file; docs/formats.md): the path coloured by speed, map voxels near it, "
           "playback and plots with the limits given.")
       .def(
           "yaw",
           [](const Trajectory& t, const py::handle& ts, const std::string& yaw, double max_yaw_rate) {
             const auto times = AsDoubles(ts, "ts");
-            if (times.ndim() != 1) throw py::value_error("ts: expected a 1-D array of times, got shape " + ShapeText(times));
+            if (times.ndim() != 1)
+              throw py::value_error("ts: expected a 1-D array of times, got shape " + ShapeText(times));
             const std::vector<double> grid(times.data(), times.data() + times.shape(0));
             const YawProfile profile = PlanYaw(t, grid, ParseYawSpec(yaw, max_yaw_rate));
             return py::make_tuple(ToArray(profile.yaw), ToArray(profile.rate));
@@ -130,7 +138,6 @@ void BindTrajectories(py::module_& m) {
           py::arg("ts"), py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate,
           "(yaw, yaw_rate) at the increasing times ts (ENU, rad and rad/s): 'fixed:RAD', 'velocity' or 'goal', "
           "continuous, within max_yaw_rate, linear between the times.");
-
 }
 
 }  // namespace timeopt::python

@@ -45,7 +45,8 @@ inline std::string ShapeText(const py::array& a) {
 }
 
 // A float64 array from any array-like (lists, ints, float32), or a ValueError naming `name`.
-inline py::array_t<double, py::array::c_style | py::array::forcecast> AsDoubles(const py::handle& value, const char* name) {
+inline py::array_t<double, py::array::c_style | py::array::forcecast> AsDoubles(const py::handle& value,
+                                                                                const char* name) {
   if (value.is_none()) throw py::value_error(std::string(name) + ": expected numbers, got None");
   auto array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);  // clears its error
   if (!array) {
@@ -60,8 +61,8 @@ inline Eigen::Vector3d Vec3(const py::handle& value, const char* name, bool broa
   const auto a = AsDoubles(value, name);
   if (broadcast && a.ndim() == 0) return Eigen::Vector3d::Constant(*a.data());
   if (a.ndim() != 1 || a.shape(0) != 3) {
-    throw py::value_error(std::string(name) + ": expected 3 values" + (broadcast ? " or one" : "") +
-                          ", got shape " + ShapeText(a));
+    throw py::value_error(std::string(name) + ": expected 3 values" + (broadcast ? " or one" : "") + ", got shape " +
+                          ShapeText(a));
   }
   return Eigen::Vector3d(a.data()[0], a.data()[1], a.data()[2]);
 }
@@ -126,7 +127,9 @@ inline Eigen::SparseMatrix<double> Sparse(const py::handle& value, const char* n
     return m;
   }
   const auto a = AsDoubles(value, name);
-  if (a.ndim() != 2) throw py::value_error(std::string(name) + ": expected a 2-D array or a scipy.sparse matrix, got shape " + ShapeText(a));
+  if (a.ndim() != 2)
+    throw py::value_error(std::string(name) + ": expected a 2-D array or a scipy.sparse matrix, got shape " +
+                          ShapeText(a));
   Eigen::MatrixXd dense(a.shape(0), a.shape(1));
   for (py::ssize_t i = 0; i < a.shape(0); ++i) {
     for (py::ssize_t j = 0; j < a.shape(1); ++j) dense(i, j) = a.at(i, j);
@@ -136,7 +139,9 @@ inline Eigen::SparseMatrix<double> Sparse(const py::handle& value, const char* n
 
 // ---- numpy out ----
 
-inline py::array_t<double> ToArray(const std::vector<double>& v) { return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data()); }
+inline py::array_t<double> ToArray(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
 
 inline py::array_t<double> ToArray(const Eigen::VectorXd& v) { return py::array_t<double>(v.size(), v.data()); }
 
@@ -186,7 +191,8 @@ inline void SetLimit(VehicleLimits* l, const std::string& key, const py::handle&
 
 inline ConstraintMode ModeFrom(const std::string& text) {
   ConstraintMode mode;
-  if (!FromString(text, &mode)) throw py::value_error("constraint_mode: expected 'paper' or 'certified', got '" + text + "'");
+  if (!FromString(text, &mode))
+    throw py::value_error("constraint_mode: expected 'paper' or 'certified', got '" + text + "'");
   return mode;
 }
 
@@ -202,7 +208,6 @@ void BindEnum(py::module_& m, const char* name, const std::array<Enum, N>& value
   py::enum_<Enum> e(m, name, doc);
   for (const Enum value : values) e.value(ToString(value), value);
 }
-
 
 // Each adds its part of the library to the module, in this order (timeopt_module.cpp).
 void BindTemporal(py::module_& m);      // Limits, Curve, TemporalProblem, results, solve, Solver

@@ -97,8 +97,9 @@ inline py::object OptionalState(const std::optional<double>& v) { return v ? py:
 inline py::tuple LimitsState(const VehicleLimits& l) {
   return py::make_tuple("Limits", kStateVersion, Vec3State(l.max_velocity), Vec3State(l.max_acceleration),
                         l.max_jerk ? py::object(Vec3State(*l.max_jerk)) : py::none(), OptionalState(l.max_speed),
-                        OptionalState(l.max_acceleration_norm), OptionalState(l.max_thrust), OptionalState(l.min_thrust),
-                        OptionalState(l.max_tilt), l.gravity, OptionalState(l.max_acceleration_change));
+                        OptionalState(l.max_acceleration_norm), OptionalState(l.max_thrust),
+                        OptionalState(l.min_thrust), OptionalState(l.max_tilt), l.gravity,
+                        OptionalState(l.max_acceleration_change));
 }
 inline VehicleLimits ReadLimits(Reader& r) {
   VehicleLimits l;
@@ -249,13 +250,13 @@ inline py::tuple ResultState(const TemporalResult& t) {
     relaxation = py::make_tuple(b.start_speed_given, b.start_speed, b.end_speed_given, b.end_speed, b.start_scale,
                                 b.start_acceleration);
   }
-  return py::make_tuple(
-      "TemporalResult", kStateVersion, ToString(t.status), t.message, t.solver, t.method, t.rows, t.total_time,
-      t.objective, t.piece_durations, t.iterations, t.solve_time_seconds, t.build_time_seconds, ProfileState(t.profile),
-      joints, t.max_velocity_ratio, t.max_acceleration_ratio, OptionalState(t.max_speed_ratio),
-      OptionalState(t.max_acceleration_norm_ratio), OptionalState(t.max_thrust_ratio), OptionalState(t.min_thrust_ratio),
-      OptionalState(t.max_tilt_ratio), infeasibility, relaxation, t.jerk_limited, t.max_jerk_ratio, t.scp_iterations,
-      t.scp_history, t.reduced_accuracy);
+  return py::make_tuple("TemporalResult", kStateVersion, ToString(t.status), t.message, t.solver, t.method, t.rows,
+                        t.total_time, t.objective, t.piece_durations, t.iterations, t.solve_time_seconds,
+                        t.build_time_seconds, ProfileState(t.profile), joints, t.max_velocity_ratio,
+                        t.max_acceleration_ratio, OptionalState(t.max_speed_ratio),
+                        OptionalState(t.max_acceleration_norm_ratio), OptionalState(t.max_thrust_ratio),
+                        OptionalState(t.min_thrust_ratio), OptionalState(t.max_tilt_ratio), infeasibility, relaxation,
+                        t.jerk_limited, t.max_jerk_ratio, t.scp_iterations, t.scp_history, t.reduced_accuracy);
 }
 inline TemporalResult ResultFromState(const py::tuple& state) {
   Reader r(state, "TemporalResult");

@@ -31,8 +31,10 @@ PYBIND11_MODULE(timeopt, m) {
   // A file that cannot be opened or written is an OSError, as Python's own open() makes it.
   py::register_exception<FileError>(m, "FileError", PyExc_OSError);
 
-  BindEnum(m, "TemporalStatus", kTemporalStatuses, "Outcome of a temporal solve (as in C++: a status, not an exception).");
-  BindEnum(m, "ConstraintMode", kConstraintModes, "paper: the paper's rows at grid points; certified: limits on whole cells.");
+  BindEnum(m, "TemporalStatus", kTemporalStatuses,
+           "Outcome of a temporal solve (as in C++: a status, not an exception).");
+  BindEnum(m, "ConstraintMode", kConstraintModes,
+           "paper: the paper's rows at grid points; certified: limits on whole cells.");
   BindEnum(m, "PlanStatus", kPlanStatuses, "Outcome of a plan.");
 
   BindTemporal(m);

@@ -49,7 +49,9 @@ inline int64_t DefaultMemoryBudgetMiB() {
 }
 // --max-memory MiB, 1 to 2^40, described by `help` (which says what the budget covers).
 inline void AddMemoryOption(CLI::App* sub, int64_t* mebibytes, const std::string& help) {
-  sub->add_option("--max-memory", *mebibytes, help)->check(CLI::Range(int64_t{1}, int64_t{1} << 40))->capture_default_str();
+  sub->add_option("--max-memory", *mebibytes, help)
+      ->check(CLI::Range(int64_t{1}, int64_t{1} << 40))
+      ->capture_default_str();
 }
 inline void AddMemoryBudgetOption(CLI::App* sub, int64_t* mebibytes) {
   AddMemoryOption(sub, mebibytes,
@@ -86,9 +88,9 @@ inline nlohmann::ordered_json FlightSummary(const FeasibilityReport& flight, con
   // The report's own JSON (io), of which the summary keeps the verdict and the largest ratios.
   const nlohmann::ordered_json report = nlohmann::ordered_json::parse(FeasibilityReportToJson(flight));
   nlohmann::ordered_json j;
-  for (const char* key : {"feasible", "max_velocity_ratio", "max_acceleration_ratio", "max_position_error",
-                          "max_speed_ratio", "max_acceleration_norm_ratio", "max_thrust_ratio", "min_thrust_ratio",
-                          "max_tilt_ratio", "tolerance"}) {
+  for (const char* key :
+       {"feasible", "max_velocity_ratio", "max_acceleration_ratio", "max_position_error", "max_speed_ratio",
+        "max_acceleration_norm_ratio", "max_thrust_ratio", "min_thrust_ratio", "max_tilt_ratio", "tolerance"}) {
     if (report.contains(key)) j[key] = report[key];
   }
   if (!flight.feasible && !limits.max_jerk) j["note"] = kFlightNote;

@@ -55,7 +55,8 @@ int RunConic(const ConicArgs& args) {
   }
 
   conic::SolverOptions options;
-  options.max_factor_bytes = std::max<int64_t>(1, static_cast<int64_t>(static_cast<double>(args.max_memory_mib) * (1 << 20) - peak));
+  options.max_factor_bytes =
+      std::max<int64_t>(1, static_cast<int64_t>(static_cast<double>(args.max_memory_mib) * (1 << 20) - peak));
   conic::Solver solver(options);
   conic::Result result;
   std::vector<double> times;
@@ -69,8 +70,10 @@ int RunConic(const ConicArgs& args) {
   nlohmann::ordered_json json = nlohmann::ordered_json::parse(ConicResultToJson(model, result, median));
   json["repeat"] = args.repeat;
   const std::string out = json.dump(2) + "\n";
-  if (args.output.empty()) std::cout << out;
-  else WriteTextFile(args.output, out);
+  if (args.output.empty())
+    std::cout << out;
+  else
+    WriteTextFile(args.output, out);
   if (!result.is_success()) {
     std::cerr << "timeopt: " << conic::ToString(result.status) << ": " << result.message << "\n";
   }
@@ -81,9 +84,10 @@ int RunConic(const ConicArgs& args) {
 
 void RegisterConicCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<ConicArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "conic", "Solve a conic problem (CBF file: linear, second-order and rotated cones) with our "
-               "interior-point solver");
+  CLI::App* sub =
+      app.add_subcommand("conic",
+                         "Solve a conic problem (CBF file: linear, second-order and rotated cones) with our "
+                         "interior-point solver");
   sub->add_option("PROBLEM", args->problem, "Problem in the Conic Benchmark Format (.cbf)")->required();
   sub->add_option("-o,--output", args->output, "Result JSON file (default: stdout)");
   sub->add_option("--repeat", args->repeat, "Solve N times and report the median solve time")

@@ -21,16 +21,14 @@ struct CurveArgs {
 
 int RunCurve(const CurveArgs& args) {
   const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
-  const PiecewiseCurve curve =
-      args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
+  const PiecewiseCurve curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   WriteCurveJson(curve, args.output);
 
   const ContinuityReport report = curve.Continuity(4);
   const double length = curve.ArcLength(1e-9);
   if (args.json) {
-    nlohmann::ordered_json j = {{"kind", args.kind}, {"waypoints", waypoints.cols()},
-                                {"pieces", curve.num_pieces()}, {"length", length},
-                                {"continuity", report.jump}, {"output", args.output}};
+    nlohmann::ordered_json j = {{"kind", args.kind}, {"waypoints", waypoints.cols()}, {"pieces", curve.num_pieces()},
+                                {"length", length},  {"continuity", report.jump},     {"output", args.output}};
     std::cout << j.dump(2) << "\n";
     return kExitOk;
   }
@@ -39,8 +37,8 @@ int RunCurve(const CurveArgs& args) {
             << std::setprecision(9) << "length: " << length << " m\n"
             << "continuity (largest jump at the joints):\n";
   for (size_t d = 0; d < report.jump.size(); ++d) {
-    std::cout << "  derivative " << d << ": " << std::setprecision(3) << std::scientific
-              << report.jump[d] << std::defaultfloat << "\n";
+    std::cout << "  derivative " << d << ": " << std::setprecision(3) << std::scientific << report.jump[d]
+              << std::defaultfloat << "\n";
   }
   std::cout << "written: " << args.output << "\n";
   return kExitOk;
@@ -50,12 +48,10 @@ int RunCurve(const CurveArgs& args) {
 
 void RegisterCurveCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<CurveArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "curve", "Fit a curve through waypoints (x,y,z CSV rows) with unit piece durations in s");
-  sub->add_option("WAYPOINTS", args->waypoints, "Waypoint CSV file, one x,y,z row per waypoint")
-      ->required();
-  sub->add_option("--kind", args->kind,
-                  "cubic: C2 natural cubic; minjerk: minimum-jerk quintic, rest to rest")
+  CLI::App* sub =
+      app.add_subcommand("curve", "Fit a curve through waypoints (x,y,z CSV rows) with unit piece durations in s");
+  sub->add_option("WAYPOINTS", args->waypoints, "Waypoint CSV file, one x,y,z row per waypoint")->required();
+  sub->add_option("--kind", args->kind, "cubic: C2 natural cubic; minjerk: minimum-jerk quintic, rest to rest")
       ->check(CLI::IsMember({"cubic", "minjerk"}))
       ->capture_default_str();
   sub->add_option("-o,--output", args->output, "Output curve JSON file")->required();

@@ -36,7 +36,8 @@ struct ExportArgs {
 int RunExport(const ExportArgs& args) {
   const Trajectory trajectory = ReadTrajectoryJson(args.trajectory);
   ExportFormat format = ExportFormat::kCsv;
-  if (!FromString(args.format, &format)) throw std::invalid_argument("--format: expected " + EnumChoices(kExportFormats));
+  if (!FromString(args.format, &format))
+    throw std::invalid_argument("--format: expected " + EnumChoices(kExportFormats));
   ExportOptions options;
   options.rate_hz = args.rate;
   options.yaw = ParseYawSpec(args.yaw, args.max_yaw_rate);
@@ -61,19 +62,26 @@ int RunExport(const ExportArgs& args) {
 void RegisterExportCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* sub = app.add_subcommand(
-      "export", "Export a trajectory file (--trajectory of plan, temporal, waypoints) as CSV, polynomial segments, "
-                "PX4 setpoints (NED) or a ROS 1 bag");
+      "export",
+      "Export a trajectory file (--trajectory of plan, temporal, waypoints) as CSV, polynomial segments, "
+      "PX4 setpoints (NED) or a ROS 1 bag");
   sub->add_option("trajectory", args->trajectory, "Trajectory JSON")->required();
-  sub->add_option("--format", args->format, "csv (ENU samples with yaw), polynomial (JSON segments), px4 (NED "
-                                            "TrajectorySetpoint rows), rosbag (nav_msgs/Path, MultiDOFJointTrajectory, markers)")
+  sub->add_option("--format", args->format,
+                  "csv (ENU samples with yaw), polynomial (JSON segments), px4 (NED "
+                  "TrajectorySetpoint rows), rosbag (nav_msgs/Path, MultiDOFJointTrajectory, markers)")
       ->required()
       ->check(CLI::IsMember(EnumNames(kExportFormats)));
   sub->add_option("-o,--output", args->output, "Output file")->required();
-  sub->add_option("--rate", args->rate, "Sample rate of csv, px4 and rosbag, Hz")->check(CLI::PositiveNumber)->capture_default_str();
-  sub->add_option("--yaw", args->yaw, "Heading: fixed:RAD (ENU, from +x counter-clockwise), velocity (along the horizontal "
-                                      "velocity) or goal (toward the end)")
+  sub->add_option("--rate", args->rate, "Sample rate of csv, px4 and rosbag, Hz")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("--max-yaw-rate", args->max_yaw_rate, "Largest yaw rate, rad/s")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--yaw", args->yaw,
+                  "Heading: fixed:RAD (ENU, from +x counter-clockwise), velocity (along the horizontal "
+                  "velocity) or goal (toward the end)")
+      ->capture_default_str();
+  sub->add_option("--max-yaw-rate", args->max_yaw_rate, "Largest yaw rate, rad/s")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   sub->add_option("--map", args->map, "rosbag: draw the occupied voxels of this OctoMap near the path");
   sub->add_option("--voxel-radius", args->voxel_radius, "rosbag with --map: voxels within this distance of the path, m")
       ->check(CLI::NonNegativeNumber)
@@ -84,7 +92,8 @@ void RegisterExportCommand(CLI::App& app, Runner& run) {
   sub->add_option("--max-velocity-error", args->max_velocity_error, "polynomial: largest velocity error, m/s")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_option("--max-acceleration-error", args->max_acceleration_error, "polynomial: largest acceleration error, m/s^2")
+  sub->add_option("--max-acceleration-error", args->max_acceleration_error,
+                  "polynomial: largest acceleration error, m/s^2")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sub->callback([args, &run] { run = [args] { return RunExport(*args); }; });

@@ -11,8 +11,9 @@
 
 int main(int argc, char** argv) {
   using namespace timeopt::cli;
-  CLI::App app{"timeopt: minimum-time quadrotor trajectories (spatial-temporal decoupling, Gao et al. "
-               "IROS 2018)"};
+  CLI::App app{
+      "timeopt: minimum-time quadrotor trajectories (spatial-temporal decoupling, Gao et al. "
+      "IROS 2018)"};
   app.set_version_flag("--version", std::string("timeopt ") + TIMEOPT_VERSION_STRING);
   app.require_subcommand(1);
   Runner run;

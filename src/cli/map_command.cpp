@@ -52,9 +52,8 @@ Eigen::AlignedBox3d BoundsFromVector(const std::vector<double>& v) {
 
 std::string FormatBox(const Eigen::AlignedBox3d& box) {
   std::ostringstream out;
-  out << std::setprecision(6) << "[" << box.min().x() << ", " << box.max().x() << "] x ["
-      << box.min().y() << ", " << box.max().y() << "] x [" << box.min().z() << ", "
-      << box.max().z() << "] m";
+  out << std::setprecision(6) << "[" << box.min().x() << ", " << box.max().x() << "] x [" << box.min().y() << ", "
+      << box.max().y() << "] x [" << box.min().z() << ", " << box.max().z() << "] m";
   return out.str();
 }
 
@@ -68,8 +67,8 @@ struct InfoArgs {
 int RunInfo(const InfoArgs& args) {
   const OccupancyMap map = OccupancyMap::Load(args.map, ParseUnknown(args.unknown));
   if (args.json) {
-    nlohmann::ordered_json j = {{"map", args.map}, {"tree_type", map.source_type()},
-                                {"resolution", map.resolution()}, {"empty", map.empty()}};
+    nlohmann::ordered_json j = {
+        {"map", args.map}, {"tree_type", map.source_type()}, {"resolution", map.resolution()}, {"empty", map.empty()}};
     if (!map.empty()) {
       const VoxelBox box = map.KnownBox();
       const Eigen::AlignedBox3d bounds = map.Bounds();
@@ -96,14 +95,13 @@ int RunInfo(const InfoArgs& args) {
   const VoxelBox box = map.KnownBox();
   const double r = map.resolution();
   std::cout << "bounds: " << FormatBox(map.Bounds()) << "\n"
-            << "size: " << box.size.x() * r << " x " << box.size.y() * r << " x "
-            << box.size.z() * r << " m (" << box.size.x() << " x " << box.size.y() << " x "
-            << box.size.z() << " = " << box.num_voxels() << " voxels)\n"
+            << "size: " << box.size.x() * r << " x " << box.size.y() * r << " x " << box.size.z() * r << " m ("
+            << box.size.x() << " x " << box.size.y() << " x " << box.size.z() << " = " << box.num_voxels()
+            << " voxels)\n"
             << "tree: " << map.NumNodes() << " nodes, " << map.NumLeaves() << " leaves\n"
             << std::setprecision(6) << "occupied volume: " << map.OccupiedVolume() << " m^3\n"
             << "free volume: " << map.FreeVolume() << " m^3\n"
-            << "unknown volume in bounds: "
-            << UnknownVolume(map, box) << " m^3\n"
+            << "unknown volume in bounds: " << UnknownVolume(map, box) << " m^3\n"
             << "dense ESDF over bounds: " << box.num_voxels() * 4.0 / (1 << 20) << " MiB\n";
   return kExitOk;
 }
@@ -121,15 +119,13 @@ int WriteGenerated(const OccupancyGrid& grid, const std::string& kind, const std
   const auto start = std::chrono::steady_clock::now();
   const OccupancyMap map = OccupancyMap::FromGrid(grid);
   map.Save(output);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << "generated: " << kind << "\n"
             << "bounds: " << FormatBox(grid.box.Metric(grid.resolution)) << "\n"
             << "resolution: " << grid.resolution << " m\n"
-            << "voxels: " << grid.box.num_voxels() << " (" << grid.CountOccupied()
-            << " occupied)\n"
-            << "tree: " << map.NumNodes() << " nodes (built and written in " << std::setprecision(3)
-            << seconds << " s)\n"
+            << "voxels: " << grid.box.num_voxels() << " (" << grid.CountOccupied() << " occupied)\n"
+            << "tree: " << map.NumNodes() << " nodes (built and written in " << std::setprecision(3) << seconds
+            << " s)\n"
             << "written: " << output << "\n";
   return kExitOk;
 }
@@ -141,8 +137,7 @@ void CheckOutputName(const std::string& output) {
 }
 
 void AddBoundsOption(CLI::App* sub, GenerateArgs* args, const std::string& defaults) {
-  sub->add_option("--bounds", args->bounds,
-                  "xmin ymin zmin xmax ymax zmax in metres (default " + defaults + ")")
+  sub->add_option("--bounds", args->bounds, "xmin ymin zmin xmax ymax zmax in metres (default " + defaults + ")")
       ->expected(6);
 }
 
@@ -155,10 +150,8 @@ void RegisterGenerate(CLI::App* map_app, Runner& run) {
   AddBoundsOption(forest, args.get(), "0 0 0 10 10 3");
   forest->add_option("--resolution", args->forest.resolution, "Voxel edge, m")->capture_default_str();
   forest->add_option("--density", args->forest.density, "Trees per m^2")->capture_default_str();
-  forest->add_option("--radius-min", args->forest.min_radius, "Smallest radius, m")
-      ->capture_default_str();
-  forest->add_option("--radius-max", args->forest.max_radius, "Largest radius, m")
-      ->capture_default_str();
+  forest->add_option("--radius-min", args->forest.min_radius, "Smallest radius, m")->capture_default_str();
+  forest->add_option("--radius-max", args->forest.max_radius, "Largest radius, m")->capture_default_str();
   forest->add_option("--seed", args->forest.seed, "Random seed")->capture_default_str();
   forest->add_option("-o,--output", args->output, "Output .bt file")->required();
   forest->callback([args, &run] {
@@ -170,21 +163,15 @@ void RegisterGenerate(CLI::App* map_app, Runner& run) {
     };
   });
 
-  CLI::App* turn = gen->add_subcommand(
-      "sharp-turn", "Narrow corridor with a near-reverse turn (paper Sect. I)");
-  turn->add_option("--resolution", args->sharp_turn.resolution, "Voxel edge, m")
-      ->capture_default_str();
-  turn->add_option("--width", args->sharp_turn.corridor_width, "Corridor width, m")
-      ->capture_default_str();
-  turn->add_option("--leg-length", args->sharp_turn.leg_length, "Length of each leg, m")
-      ->capture_default_str();
+  CLI::App* turn = gen->add_subcommand("sharp-turn", "Narrow corridor with a near-reverse turn (paper Sect. I)");
+  turn->add_option("--resolution", args->sharp_turn.resolution, "Voxel edge, m")->capture_default_str();
+  turn->add_option("--width", args->sharp_turn.corridor_width, "Corridor width, m")->capture_default_str();
+  turn->add_option("--leg-length", args->sharp_turn.leg_length, "Length of each leg, m")->capture_default_str();
   turn->add_option("--turn-angle", args->sharp_turn.turn_angle_deg,
                    "Heading change at the turn, degrees (180: full reversal)")
       ->capture_default_str();
-  turn->add_option("--height", args->sharp_turn.height, "Free corridor height, m")
-      ->capture_default_str();
-  turn->add_option("--wall", args->sharp_turn.wall, "Solid margin around the corridor, m")
-      ->capture_default_str();
+  turn->add_option("--height", args->sharp_turn.height, "Free corridor height, m")->capture_default_str();
+  turn->add_option("--wall", args->sharp_turn.wall, "Solid margin around the corridor, m")->capture_default_str();
   turn->add_option("-o,--output", args->output, "Output .bt file")->required();
   turn->callback([args, &run] {
     run = [args] {
@@ -226,12 +213,10 @@ int RunSlice(const SliceArgs& args) {
   const OccupancyMap map = OccupancyMap::Load(args.map, ParseUnknown(args.unknown));
   const auto start = std::chrono::steady_clock::now();
   const Esdf esdf = Esdf::FromMap(map, std::nullopt, args.max_memory_mib * 1024 * 1024);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   WriteEsdfSlicePng(esdf, args.z, args.output, args.image);
-  std::cout << "esdf: " << esdf.box().size.x() << " x " << esdf.box().size.y() << " x "
-            << esdf.box().size.z() << " voxels, built in " << std::setprecision(3)
-            << seconds * 1e3 << " ms\n"
+  std::cout << "esdf: " << esdf.box().size.x() << " x " << esdf.box().size.y() << " x " << esdf.box().size.z()
+            << " voxels, built in " << std::setprecision(3) << seconds * 1e3 << " ms\n"
             << "slice: z = " << args.z << " m\n"
             << "written: " << args.output << "\n";
   return kExitOk;
@@ -255,18 +240,17 @@ void RegisterMapCommand(CLI::App& app, Runner& run) {
   RegisterGenerate(map_app, run);
 
   auto slice = std::make_shared<SliceArgs>();
-  CLI::App* slice_app = map_app->add_subcommand(
-      "slice", "PNG of the signed distance at a height, obstacles in black");
+  CLI::App* slice_app = map_app->add_subcommand("slice", "PNG of the signed distance at a height, obstacles in black");
   slice_app->add_option("MAP", slice->map, "OctoMap file (.bt or .ot)")->required();
   slice_app->add_option("--z", slice->z, "Height of the slice, m")->required();
   slice_app->add_option("-o,--output", slice->output, "Output PNG file")->required();
   AddUnknownOption(slice_app, &slice->unknown);
   AddMemoryBudgetOption(slice_app, &slice->max_memory_mib);
-  slice_app->add_option("--pixels-per-voxel", slice->image.pixels_per_voxel,
-                        "Image pixels per voxel edge")
+  slice_app->add_option("--pixels-per-voxel", slice->image.pixels_per_voxel, "Image pixels per voxel edge")
       ->capture_default_str();
-  slice_app->add_option("--max-distance", slice->image.max_distance,
-                        "Distance where the colour saturates, m (0: the slice's largest)")
+  slice_app
+      ->add_option("--max-distance", slice->image.max_distance,
+                   "Distance where the colour saturates, m (0: the slice's largest)")
       ->capture_default_str();
   slice_app->callback([slice, &run] { run = [slice] { return RunSlice(*slice); }; });
 }

@@ -105,8 +105,10 @@ PlannerOptions OptionsFrom(const PlanArgs& args) {
   if (args.max_velocity) options.limits.max_velocity.setConstant(*args.max_velocity);
   if (args.max_acceleration) options.limits.max_acceleration.setConstant(*args.max_acceleration);
   if (args.max_jerk) {
-    if (*args.max_jerk > 0.0) options.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
-    else options.limits.max_jerk.reset();
+    if (*args.max_jerk > 0.0)
+      options.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
+    else
+      options.limits.max_jerk.reset();
   }
   ApplyQuadrotorLimits(args.quadrotor, &options.limits);
   if (!args.start_velocity.empty()) options.start_velocity = ParsePoint(args.start_velocity, "--start-velocity");
@@ -240,8 +242,9 @@ int RunPlan(PlanArgs args) {
     // --start-velocity / --start-acceleration; see `timeopt simulate`).
     t = Clock::now();
     try {
-      const FeasibilityReport flight = SummaryQuadrotor(options.limits).Fly(
-          trajectory, options.limits, options.start_velocity, options.start_acceleration);
+      const FeasibilityReport flight =
+          SummaryQuadrotor(options.limits)
+              .Fly(trajectory, options.limits, options.start_velocity, options.start_acceleration);
       summary["flight"] = FlightSummary(flight, options.limits);
       progress("flight", std::chrono::duration<double, std::milli>(Clock::now() - t).count(),
                flight.feasible ? "the limits hold" : flight.message);
@@ -285,12 +288,12 @@ int RunPlan(PlanArgs args) {
 
 void RegisterPlanCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<PlanArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "plan",
-      "Plan a minimum-time trajectory on a map: A* front-end, Ceres spatial stage, SOCP temporal "
-      "stage. Without --map: the shipped default map (" +
-          std::string(kDefaultMap) + ", " + kDefaultStart + " -> " + kDefaultGoal +
-          "), writing results/plan.csv and results/plan.png");
+  CLI::App* sub =
+      app.add_subcommand("plan",
+                         "Plan a minimum-time trajectory on a map: A* front-end, Ceres spatial stage, SOCP temporal "
+                         "stage. Without --map: the shipped default map (" +
+                             std::string(kDefaultMap) + ", " + kDefaultStart + " -> " + kDefaultGoal +
+                             "), writing results/plan.csv and results/plan.png");
   sub->add_option("--map", args->map, "OctoMap file (.bt/.ot)");
   sub->add_option("--start", args->start, "Start position x,y,z (metres)");
   sub->add_option("--goal", args->goal, "Goal position x,y,z (metres)");
@@ -318,11 +321,9 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
                   "The vehicle's velocity at the start, x,y,z m/s (re-planning in flight; default: at rest)");
   sub->add_option("--start-acceleration", args->start_acceleration,
                   "The vehicle's acceleration at the start, x,y,z m/s^2 (default: 0)");
-  sub->add_option("--robot-radius", args->robot_radius,
-                  "Robot radius, metres" + shown(defaults.robot_radius))
+  sub->add_option("--robot-radius", args->robot_radius, "Robot radius, metres" + shown(defaults.robot_radius))
       ->check(CLI::NonNegativeNumber);
-  sub->add_option("--unknown", args->unknown,
-                  "Unobserved voxels inside the map's box: free (optimistic) or occupied")
+  sub->add_option("--unknown", args->unknown, "Unobserved voxels inside the map's box: free (optimistic) or occupied")
       ->check(CLI::IsMember(EnumNames(kUnknownSpaces)))
       ->capture_default_str();
   sub->add_option("--region-margin", args->region_margin,
@@ -332,16 +333,20 @@ void RegisterPlanCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_flag("--whole-map", args->whole_map, "The distance field covers the whole map (no region of interest)");
   AddMemoryBudgetOption(sub, &args->max_memory_mib);
-  sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr as it ends (map, ESDF, search, spatial, check, temporal)");
-  sub->add_flag("-q,--quiet", args->quiet, "Print no summary (the files are still written; the exit code says how it went)");
+  sub->add_flag("-v,--verbose", args->verbose,
+                "One line per stage on stderr as it ends (map, ESDF, search, spatial, check, temporal)");
+  sub->add_flag("-q,--quiet", args->quiet,
+                "Print no summary (the files are still written; the exit code says how it went)");
   sub->add_flag("--print-config", args->print_config,
-               "Print the planner configuration that the defaults, --config and the flags give, as JSON for "
-               "--config, and plan nothing (the quadrotor limits and the start state are flags only, not in it)");
-  sub->add_option("--config", args->config, "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
+                "Print the planner configuration that the defaults, --config and the flags give, as JSON for "
+                "--config, and plan nothing (the quadrotor limits and the start state are flags only, not in it)");
+  sub->add_option("--config", args->config,
+                  "Planner options JSON (keys: timeopt/io/planner_io.h; flags override them)");
   sub->add_option("-o,--output", args->output, "Trajectory samples CSV at 100 Hz");
   sub->add_option("--plot", args->plot, "PNG: trajectory over a map slice, coloured by speed");
   sub->add_option("--trajectory", args->trajectory, kTrajectoryOptionHelp);
-  sub->add_option("--html", args->html, "3D page: the plan over the map's voxels, with plots and playback (one HTML file)");
+  sub->add_option("--html", args->html,
+                  "3D page: the plan over the map's voxels, with plots and playback (one HTML file)");
   sub->callback([args, &run] { run = [args] { return RunPlan(*args); }; });
 }
 

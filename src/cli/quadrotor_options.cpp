@@ -20,7 +20,8 @@ void ApplyQuadrotorLimits(const QuadrotorLimitArgs& args, VehicleLimits* limits)
   const auto set = [](const std::optional<double>& value, const char* option, std::optional<double>* field) {
     if (!value) return;
     if (!std::isfinite(*value) || *value < 0.0) {
-      throw std::invalid_argument(std::string(option) + ": expected a finite number >= 0, got " + std::to_string(*value));
+      throw std::invalid_argument(std::string(option) + ": expected a finite number >= 0, got " +
+                                  std::to_string(*value));
     }
     *field = *value;
   };

@@ -56,25 +56,29 @@ int RunSimulate(const SimulateArgs& args) {
   if (args.problem.empty() == args.samples.empty()) {
     throw std::invalid_argument("give either PROBLEM.json or --samples TRAJ.csv");
   }
-  if (!args.samples.empty() && !((args.max_velocity > 0.0 || args.quadrotor.max_speed) &&
-                                  (args.max_acceleration > 0.0 || args.quadrotor.max_acceleration_norm ||
-                                   args.quadrotor.max_thrust))) {
-    throw std::invalid_argument("--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis), or "
-                                "--max-speed and --max-acceleration-norm or --max-thrust");
+  if (!args.samples.empty() &&
+      !((args.max_velocity > 0.0 || args.quadrotor.max_speed) &&
+        (args.max_acceleration > 0.0 || args.quadrotor.max_acceleration_norm || args.quadrotor.max_thrust))) {
+    throw std::invalid_argument(
+        "--samples needs --max-velocity and --max-acceleration (m/s, m/s^2 per axis), or "
+        "--max-speed and --max-acceleration-norm or --max-thrust");
   }
   if (!args.samples.empty() && args.max_jerk) {
-    throw std::invalid_argument("--max-jerk sets the problem's jerk limit, so it needs PROBLEM.json; for the "
-                                "vehicle's own limit use --vehicle-max-jerk");
+    throw std::invalid_argument(
+        "--max-jerk sets the problem's jerk limit, so it needs PROBLEM.json; for the "
+        "vehicle's own limit use --vehicle-max-jerk");
   }
   if (!std::isfinite(args.control_rate) || !std::isfinite(args.bandwidth) || !std::isfinite(args.settle_time) ||
       !std::isfinite(args.max_jerk.value_or(0.0)) || !std::isfinite(args.vehicle_max_jerk) ||
       !std::isfinite(args.max_velocity) || !std::isfinite(args.max_acceleration)) {
-    throw std::invalid_argument("--control-rate, --bandwidth, --settle-time, --max-jerk, --vehicle-max-jerk, "
-                                "--max-velocity and --max-acceleration must be finite");
+    throw std::invalid_argument(
+        "--control-rate, --bandwidth, --settle-time, --max-jerk, --vehicle-max-jerk, "
+        "--max-velocity and --max-acceleration must be finite");
   }
   if (args.control_rate < 10.0 * args.bandwidth) {
-    throw std::invalid_argument("--control-rate must be at least 10 x --bandwidth (10 controller steps per "
-                                "time constant 1 / bandwidth)");
+    throw std::invalid_argument(
+        "--control-rate must be at least 10 x --bandwidth (10 controller steps per "
+        "time constant 1 / bandwidth)");
   }
   QuadrotorSimOptions options;
   options.bandwidth = args.bandwidth;
@@ -110,12 +114,15 @@ int RunSimulate(const SimulateArgs& args) {
     } else {
       TemporalProblem problem = ReadTemporalProblemJson(args.problem);
       if (args.max_jerk) {
-        if (*args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
-        else problem.limits.max_jerk.reset();
+        if (*args.max_jerk > 0.0)
+          problem.limits.max_jerk = Eigen::Vector3d::Constant(*args.max_jerk);
+        else
+          problem.limits.max_jerk.reset();
       }
       ApplyQuadrotorLimits(args.quadrotor, &problem.limits);
       problem.Validate();
-      const TemporalResult result = BudgetedSolver(problem, args.solver, args.max_memory_mib, args.ipopt_seconds)->Solve(problem);
+      const TemporalResult result =
+          BudgetedSolver(problem, args.solver, args.max_memory_mib, args.ipopt_seconds)->Solve(problem);
       if (!result.is_success()) {
         std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
         return ExitCodeFor(result.status);
@@ -125,8 +132,8 @@ int RunSimulate(const SimulateArgs& args) {
         sim = QuadrotorSim(options);
       }
       // The vehicle starts in the problem's start state (a hover for rest-to-rest problems).
-      report = sim.Fly(Trajectory(problem.curve, result.profile), problem.limits,
-                       problem.boundary.start_velocity, problem.boundary.start_acceleration);
+      report = sim.Fly(Trajectory(problem.curve, result.profile), problem.limits, problem.boundary.start_velocity,
+                       problem.boundary.start_acceleration);
       json["total_time"] = result.total_time;
       // The reference itself, sampled densely by the temporal stage (no tracking).
       json["reference_max_velocity_ratio"] = result.max_velocity_ratio;
@@ -144,8 +151,10 @@ int RunSimulate(const SimulateArgs& args) {
   json["bandwidth"] = args.bandwidth;
   json["control_rate"] = args.control_rate;
   const std::string text = json.dump(2) + "\n";
-  if (args.output.empty()) std::cout << text;
-  else WriteTextFile(args.output, text);
+  if (args.output.empty())
+    std::cout << text;
+  else
+    WriteTextFile(args.output, text);
   if (!args.states.empty()) WriteTextFile(args.states, SimStatesToCsv(report.states));
   if (!report.feasible) {
     std::cerr << "timeopt: limit exceeded in simulation: " << report.message << "\n";
@@ -158,16 +167,16 @@ int RunSimulate(const SimulateArgs& args) {
 
 void RegisterSimulateCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<SimulateArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "simulate", "Solve a temporal problem and fly the trajectory with a jerk-input quadrotor under "
-                  "feedback; report whether every limit held in continuous time");
+  CLI::App* sub =
+      app.add_subcommand("simulate",
+                         "Solve a temporal problem and fly the trajectory with a jerk-input quadrotor under "
+                         "feedback; report whether every limit held in continuous time");
   sub->add_option("PROBLEM", args->problem, "Problem JSON file (as for `temporal`)");
   sub->add_option("--samples", args->samples,
                   "Fly a given trajectory instead: samples CSV t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz] "
                   "(e.g. from `temporal --samples` or another planner)");
   sub->add_option("--max-velocity", args->max_velocity, "With --samples: velocity limit per axis, m/s");
-  sub->add_option("--max-acceleration", args->max_acceleration,
-                  "With --samples: acceleration limit per axis, m/s^2");
+  sub->add_option("--max-acceleration", args->max_acceleration, "With --samples: acceleration limit per axis, m/s^2");
   sub->add_option("--solver", args->solver, "socp (our conic solver) or ipopt")
       ->check(CLI::IsMember(EnumNames(kTemporalBackends)))
       ->capture_default_str();

@@ -74,16 +74,18 @@ void ExportSocp(const TemporalProblem& problem, const std::string& path) {
 }
 
 // Solves, writes the requested outputs and returns the exit code.
-int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name,
-                  const std::string& output, const std::string& samples, const std::string& trajectory_path,
-                  double rate, const std::string& plot, int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
+int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name, const std::string& output,
+                  const std::string& samples, const std::string& trajectory_path, double rate, const std::string& plot,
+                  int64_t max_memory_mib, std::optional<double> ipopt_seconds) {
   const auto solver = BudgetedSolver(problem, solver_name, max_memory_mib, ipopt_seconds);
   const TemporalResult result = solver->Solve(problem);
   // Refuse an over-long sample request before writing the result (not after printing it).
   if (result.is_success() && !samples.empty()) Trajectory(problem.curve, result.profile).CheckSampleRate(rate);
   const std::string json = TemporalResultToJson(result);
-  if (output.empty()) std::cout << json;
-  else WriteTextFile(output, json);
+  if (output.empty())
+    std::cout << json;
+  else
+    WriteTextFile(output, json);
   if (!result.is_success()) {
     std::cerr << "timeopt: " << ToString(result.status) << ": " << result.message << "\n";
     return ExitCodeFor(result.status);
@@ -98,8 +100,8 @@ int SolveAndWrite(const TemporalProblem& problem, const std::string& solver_name
 int RunTemporal(const TemporalArgs& args) {
   TemporalProblem problem = ReadTemporalProblemJson(args.problem);
   if (args.relax_boundary) problem.relax_boundary = true;
-  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.trajectory, args.rate, args.plot,
-                                      args.max_memory_mib, args.ipopt_seconds);
+  const int exit_code = SolveAndWrite(problem, args.solver, args.output, args.samples, args.trajectory, args.rate,
+                                      args.plot, args.max_memory_mib, args.ipopt_seconds);
   if (!args.export_cbf.empty()) ExportSocp(problem, args.export_cbf);
   return exit_code;
 }
@@ -166,8 +168,8 @@ int RunWaypoints(const WaypointsArgs& args) {
   const double default_v = FlightLimits().max_velocity.x();
   const double default_a = FlightLimits().max_acceleration.x();
   problem.limits.max_velocity.setConstant(args.max_velocity.value_or(q.max_speed ? kNone : default_v));
-  problem.limits.max_acceleration.setConstant(args.max_acceleration.value_or(
-      q.max_acceleration_norm || q.max_thrust || q.max_tilt ? kNone : default_a));
+  problem.limits.max_acceleration.setConstant(
+      args.max_acceleration.value_or(q.max_acceleration_norm || q.max_thrust || q.max_tilt ? kNone : default_a));
   ApplyQuadrotorLimits(q, &problem.limits);
   problem.limits.max_jerk.reset();
   if (args.max_jerk > 0.0) problem.limits.max_jerk = Eigen::Vector3d::Constant(args.max_jerk);
@@ -211,17 +213,17 @@ int RunWaypoints(const WaypointsArgs& args) {
   const QuadrotorSim sim = SummaryQuadrotor(problem.limits);
   std::ostringstream flown;
   try {
-    const FeasibilityReport flight = sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity,
-                                                   problem.boundary.start_acceleration);
+    const FeasibilityReport flight =
+        sim.Fly(trajectory, problem.limits, problem.boundary.start_velocity, problem.boundary.start_acceleration);
     result_json["flight"] = FlightSummary(flight, problem.limits);
     if (args.verbose) {
       std::cerr << "timeopt waypoints: flight: " << (flight.feasible ? "the limits hold" : flight.message) << "\n";
     }
     flown << "flown by a jerk-input quadrotor (tracking bandwidth " << sim.options().bandwidth << " rad/s, "
-          << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio
-          << ", max |a|/amax " << flight.max_acceleration_ratio << QuadrotorRatios(flight) << " ("
-          << (flight.feasible ? "limits hold" : "limits exceeded")
-          << (problem.limits.max_jerk ? " within 1%" : "") << "; see `timeopt simulate`)";
+          << 1.0 / sim.options().time_step << " Hz): max |v|/vmax " << flight.max_velocity_ratio << ", max |a|/amax "
+          << flight.max_acceleration_ratio << QuadrotorRatios(flight) << " ("
+          << (flight.feasible ? "limits hold" : "limits exceeded") << (problem.limits.max_jerk ? " within 1%" : "")
+          << "; see `timeopt simulate`)";
     if (!flight.feasible && !problem.limits.max_jerk) flown << "\n  note: " << kFlightNote;
   } catch (const std::invalid_argument& e) {
     flown << "not flown in simulation: " << e.what();
@@ -234,23 +236,20 @@ int RunWaypoints(const WaypointsArgs& args) {
     return kExitOk;
   }
   if (args.quiet) return kExitOk;
-  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind
-            << " curve, " << problem.curve.num_pieces() << " pieces, length "
-            << problem.curve.ArcLength(1e-9) << " m)\n"
+  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind << " curve, "
+            << problem.curve.num_pieces() << " pieces, length " << problem.curve.ArcLength(1e-9) << " m)\n"
             << "limits: " << LimitsLine(problem.limits)
-            << (args.max_jerk > 0.0 ? "max_jerk " + FormatNumber(args.max_jerk) + " m/s^3, " : std::string())
-            << "K " << args.K << ", rho " << args.rho << ", "
-            << args.constraint_mode << " constraints\n"
+            << (args.max_jerk > 0.0 ? "max_jerk " + FormatNumber(args.max_jerk) + " m/s^3, " : std::string()) << "K "
+            << args.K << ", rho " << args.rho << ", " << args.constraint_mode << " constraints\n"
             << "solver: " << result.solver << ", " << result.iterations << " iterations, "
             << result.solve_time_seconds * 1e3 << " ms\n"
             << "total_time: " << result.total_time << " s\n"
             << "max |v|/vmax along the trajectory: " << result.max_velocity_ratio
             << ", max |a|/amax: " << result.max_acceleration_ratio << QuadrotorRatios(result) << "\n"
             << flown.str() << "\n"
-            << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string()
-            << ", " << (dir / "samples.csv").string() << ", " << (dir / "trajectory.json").string() << ", "
-            << (dir / "profile.png").string()
-            << "\n";
+            << "written: " << (dir / "curve.json").string() << ", " << (dir / "result.json").string() << ", "
+            << (dir / "samples.csv").string() << ", " << (dir / "trajectory.json").string() << ", "
+            << (dir / "profile.png").string() << "\n";
   return kExitOk;
 }
 
@@ -275,7 +274,6 @@ void AddIpoptSecondsOption(CLI::App* sub, std::optional<double>* seconds) {
       ->check(CLI::NonNegativeNumber);
 }
 
-
 void RegisterTemporalCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<TemporalArgs>();
   CLI::App* sub = app.add_subcommand(
@@ -285,8 +283,7 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember(EnumNames(kTemporalBackends)))
       ->capture_default_str();
   sub->add_option("-o,--output", args->output, "Result JSON file (default: stdout)");
-  sub->add_option("--samples", args->samples,
-                  "Trajectory samples CSV (t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz)");
+  sub->add_option("--samples", args->samples, "Trajectory samples CSV (t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz)");
   sub->add_option("--rate", args->rate, "Sample rate for --samples, Hz")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -295,8 +292,8 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
   AddSolveMemoryOption(sub, &args->max_memory_mib);
   AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("--relax-boundary", args->relax_boundary,
-               "If the boundary speeds cannot be flown, answer with the closest ones that can (the result's "
-               "boundary_relaxation) instead of infeasible");
+                "If the boundary speeds cannot be flown, answer with the closest ones that can (the result's "
+                "boundary_relaxation) instead of infeasible");
   sub->add_option("--export-cbf", args->export_cbf,
                   "Also write the SOCP that --solver socp solves, in the Conic Benchmark Format (its "
                   "optimal value is the result's objective), for another conic solver");
@@ -305,8 +302,8 @@ void RegisterTemporalCommand(CLI::App& app, Runner& run) {
 
 void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<WaypointsArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "waypoints", "Fit a curve through waypoints, time it optimally, write samples and a plot");
+  CLI::App* sub =
+      app.add_subcommand("waypoints", "Fit a curve through waypoints, time it optimally, write samples and a plot");
   sub->add_option("WAYPOINTS", args->waypoints, "Waypoint CSV file (x,y,z rows)")->required();
   sub->add_option("--kind", args->kind, "cubic or minjerk (rest to rest)")
       ->check(CLI::IsMember({"cubic", "minjerk"}))
@@ -316,8 +313,7 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
                       "; none when --max-speed is given)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--max-acceleration", args->max_acceleration,
-                  "Per-axis acceleration limit, m/s^2 (default " +
-                      std::to_string(FlightLimits().max_acceleration.x()) +
+                  "Per-axis acceleration limit, m/s^2 (default " + std::to_string(FlightLimits().max_acceleration.x()) +
                       "; none when --max-acceleration-norm, --max-thrust or --max-tilt is given)")
       ->check(CLI::PositiveNumber);
   AddQuadrotorLimitOptions(sub, &args->quadrotor);
@@ -326,7 +322,9 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
                   "(0: none, the paper's profile)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  sub->add_option("-K,--cells", args->K, "Cells per piece")->check(CLI::Range(1, kMaxCellsPerPiece))->capture_default_str();
+  sub->add_option("-K,--cells", args->K, "Cells per piece")
+      ->check(CLI::Range(1, kMaxCellsPerPiece))
+      ->capture_default_str();
   sub->add_option("--rho", args->rho, "Acceleration regularization weight")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -338,7 +336,8 @@ void RegisterWaypointsCommand(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sub->add_option("--rate", args->rate, "Sample rate, Hz")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--out-dir", args->out_dir, "Output directory")->capture_default_str();
-  sub->add_option("--trajectory", args->trajectory, std::string(kTrajectoryOptionHelp) + " (also written as trajectory.json in --out-dir)");
+  sub->add_option("--trajectory", args->trajectory,
+                  std::string(kTrajectoryOptionHelp) + " (also written as trajectory.json in --out-dir)");
   AddSolveMemoryOption(sub, &args->max_memory_mib);
   AddIpoptSecondsOption(sub, &args->ipopt_seconds);
   sub->add_flag("-v,--verbose", args->verbose, "One line per stage on stderr (curve, temporal, flight)");

@@ -36,7 +36,8 @@ int RunView(const ViewArgs& args) {
   page.voxel_radius = args.voxel_radius;
   std::ostringstream T;
   T << trajectory.duration() << " s";
-  page.summary = {{"T", T.str()}, {"pieces", std::to_string(trajectory.curve().num_pieces())},
+  page.summary = {{"T", T.str()},
+                  {"pieces", std::to_string(trajectory.curve().num_pieces())},
                   {"profile", trajectory.profile().jerk_limited() ? "jerk-limited" : "without a jerk limit"}};
   if (!args.map.empty()) page.summary.emplace_back("map", args.map);
   WritePlanPageHtml(trajectory, limits, map ? &*map : nullptr, args.output, page);
@@ -47,14 +48,17 @@ int RunView(const ViewArgs& args) {
 
 void RegisterViewCommand(CLI::App& app, Runner& run) {
   auto args = std::make_shared<ViewArgs>();
-  CLI::App* sub = app.add_subcommand("view", "A trajectory file as one self-contained 3D HTML page (three.js, Chart.js)");
-  sub->add_option("trajectory", args->trajectory, "Trajectory JSON (--trajectory of plan, temporal, waypoints)")->required();
+  CLI::App* sub =
+      app.add_subcommand("view", "A trajectory file as one self-contained 3D HTML page (three.js, Chart.js)");
+  sub->add_option("trajectory", args->trajectory, "Trajectory JSON (--trajectory of plan, temporal, waypoints)")
+      ->required();
   sub->add_option("-o,--output", args->output, "HTML file")->required();
   sub->add_option("--map", args->map, "OctoMap file: draw its occupied voxels near the path");
   sub->add_option("--voxel-radius", args->voxel_radius, "With --map: voxels within this distance of the path, m")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  sub->add_option("--max-velocity", args->max_velocity, "Per-axis velocity limit to draw, m/s")->check(CLI::PositiveNumber);
+  sub->add_option("--max-velocity", args->max_velocity, "Per-axis velocity limit to draw, m/s")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--max-acceleration", args->max_acceleration, "Per-axis acceleration limit to draw, m/s^2")
       ->check(CLI::PositiveNumber);
   sub->add_option("--max-jerk", args->max_jerk, "Per-axis jerk limit to draw, m/s^3")->check(CLI::PositiveNumber);

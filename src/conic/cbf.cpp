@@ -89,9 +89,7 @@ class LineReader {
   }
 
   // A size or count in [0, kMaxSize].
-  int Count(const std::string& text, const std::string& what) const {
-    return Index(text, kMaxSize + 1LL, what);
-  }
+  int Count(const std::string& text, const std::string& what) const { return Index(text, kMaxSize + 1LL, what); }
 
   double Real(const std::string& text, const std::string& what) const {
     // strtod, not stod: stod rejects subnormal values (ERANGE on underflow), which WriteCbf writes.
@@ -184,8 +182,10 @@ void AddBlock(const Block& block, const Fill& fill, std::vector<AffineExpr>& con
   if (block.domain == Domain::kSoc || block.domain == Domain::kRotated) {
     cone.resize(static_cast<std::size_t>(block.dim));
     for (int i = 0; i < block.dim; ++i) fill(i, &cone[static_cast<std::size_t>(i)]);
-    if (block.domain == Domain::kSoc) builder.AddSecondOrderCone(cone);
-    else builder.AddRotatedCone(cone);
+    if (block.domain == Domain::kSoc)
+      builder.AddSecondOrderCone(cone);
+    else
+      builder.AddRotatedCone(cone);
     return;
   }
   AffineExpr e;
@@ -232,11 +232,13 @@ CbfModel ReadCbfUnguarded(std::istream& in) {
       model.maximize = f[0] == "MAX";
     } else if (keyword == "VAR") {
       var_blocks = ReadBlocks(reader, "VAR", &n);
-      if (n > kMaxVariablesOrRows) reader.Fail("VAR declares " + std::to_string(n) + " variables, above the 2000000 supported");
+      if (n > kMaxVariablesOrRows)
+        reader.Fail("VAR declares " + std::to_string(n) + " variables, above the 2000000 supported");
       have_var = true;
     } else if (keyword == "CON") {
       con_blocks = ReadBlocks(reader, "CON", &m);
-      if (m > kMaxVariablesOrRows) reader.Fail("CON declares " + std::to_string(m) + " rows, above the 2000000 supported");
+      if (m > kMaxVariablesOrRows)
+        reader.Fail("CON declares " + std::to_string(m) + " rows, above the 2000000 supported");
       have_con = true;
     } else if (keyword == "OBJACOORD" || keyword == "ACOORD" || keyword == "BCOORD") {
       if (!have_var) reader.Fail(keyword + " before VAR");
@@ -267,9 +269,10 @@ CbfModel ReadCbfUnguarded(std::istream& in) {
       reader.ExpectFields(f, 1, "OBJBCOORD");
       model.objective_constant = reader.Real(f[0], "objective constant");
     } else if (keyword == "INT" || keyword == "PSDVAR" || keyword == "PSDCON" || keyword == "FCOORD" ||
-               keyword == "HCOORD" || keyword == "DCOORD" || keyword == "OBJFCOORD" ||
-               keyword == "POWCONES" || keyword == "POW*CONES" || keyword == "CHANGE") {
-      reader.Fail(keyword + " is not supported: the solver handles continuous problems over linear, "
+               keyword == "HCOORD" || keyword == "DCOORD" || keyword == "OBJFCOORD" || keyword == "POWCONES" ||
+               keyword == "POW*CONES" || keyword == "CHANGE") {
+      reader.Fail(keyword +
+                  " is not supported: the solver handles continuous problems over linear, "
                   "second-order and rotated second-order cones only");
     } else {
       reader.Fail("unknown keyword '" + keyword + "'");
@@ -286,10 +289,13 @@ CbfModel ReadCbfUnguarded(std::istream& in) {
   std::vector<AffineExpr> cone;
   int first = 0;
   for (const Block& block : var_blocks) {
-    AddBlock(block, [first](int i, AffineExpr* e) {
-      e->terms.assign(1, Term{first + i, 1.0});
-      e->constant = 0.0;
-    }, cone, builder);
+    AddBlock(
+        block,
+        [first](int i, AffineExpr* e) {
+          e->terms.assign(1, Term{first + i, 1.0});
+          e->constant = 0.0;
+        },
+        cone, builder);
     first += block.dim;
   }
 
@@ -300,18 +306,22 @@ CbfModel ReadCbfUnguarded(std::istream& in) {
   std::vector<Term> terms(a_entries.size());
   {
     std::vector<int> next(row_start.begin(), row_start.end() - 1);
-    for (const Entry& e : a_entries) terms[static_cast<std::size_t>(next[static_cast<std::size_t>(e.row)]++)] = {e.col, e.value};
+    for (const Entry& e : a_entries)
+      terms[static_cast<std::size_t>(next[static_cast<std::size_t>(e.row)]++)] = {e.col, e.value};
   }
   a_entries = {};
   std::vector<double> b(static_cast<std::size_t>(m), 0.0);
   for (const auto& [row, value] : b_entries) b[static_cast<std::size_t>(row)] += value;
   first = 0;
   for (const Block& block : con_blocks) {
-    AddBlock(block, [&, first](int i, AffineExpr* e) {
-      const auto r = static_cast<std::size_t>(first + i);
-      e->terms.assign(terms.begin() + row_start[r], terms.begin() + row_start[r + 1]);
-      e->constant = b[r];
-    }, cone, builder);
+    AddBlock(
+        block,
+        [&, first](int i, AffineExpr* e) {
+          const auto r = static_cast<std::size_t>(first + i);
+          e->terms.assign(terms.begin() + row_start[r], terms.begin() + row_start[r + 1]);
+          e->constant = b[r];
+        },
+        cone, builder);
     first += block.dim;
   }
   model.problem = builder.Build();
@@ -344,11 +354,12 @@ void WriteCbf(const Problem& problem, std::ostream& destination) {
   out.precision(17);
 
   out << "# timeopt: the first " << p << " rows are A x - b (L=), the other " << m << " are h - G x\n"
-      << "VER\n3\n\nOBJSENSE\nMIN\n\nVAR\n" << n << " " << (n > 0 ? 1 : 0) << "\n";
+      << "VER\n3\n\nOBJSENSE\nMIN\n\nVAR\n"
+      << n << " " << (n > 0 ? 1 : 0) << "\n";
   if (n > 0) out << "F " << n << "\n";
 
-  const int blocks = (p > 0 ? 1 : 0) + (k.num_nonnegative > 0 ? 1 : 0) +
-                     static_cast<int>(k.soc_dims.size() + k.rotated_dims.size());
+  const int blocks =
+      (p > 0 ? 1 : 0) + (k.num_nonnegative > 0 ? 1 : 0) + static_cast<int>(k.soc_dims.size() + k.rotated_dims.size());
   out << "\nCON\n" << p + m << " " << blocks << "\n";
   if (p > 0) out << "L= " << p << "\n";
   if (k.num_nonnegative > 0) out << "L+ " << k.num_nonnegative << "\n";

@@ -174,12 +174,11 @@ bool Cones::ComputeScaling(const Eigen::VectorXd& s, const Eigen::VectorXd& z, E
   for (std::size_t k = 0; k < socs.size(); ++k) {
     const SocBlock& blk = socs[k];
     const int o = blk.start;
-    const bool ok =
-        blk.dim == 3
-            ? NtScalingCone<3>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
-                               lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], 3)
-            : NtScalingCone<0>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
-                               lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], blk.dim);
+    const bool ok = blk.dim == 3
+                        ? NtScalingCone<3>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
+                                           lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], 3)
+                        : NtScalingCone<0>(s.data() + o, z.data() + o, wbar.data() + o, eta[k], lambda.data() + o,
+                                           lambda_step.data() + o, lambda_isd[k], lambda_ilb[k], blk.dim);
     if (!ok) return false;
   }
   return true;
@@ -270,9 +269,8 @@ void Cones::ComplementarityRhs(bool corrector, double sigma_mu, double eta_r, co
   }
 }
 
-double Cones::CompleteDirection(const Eigen::VectorXd& dz, const Eigen::VectorXd& ldiv,
-                                const Eigen::VectorXd& w_ldiv, Eigen::VectorXd& w_dz, Eigen::VectorXd& ds,
-                                Eigen::VectorXd& winv_ds) {
+double Cones::CompleteDirection(const Eigen::VectorXd& dz, const Eigen::VectorXd& ldiv, const Eigen::VectorXd& w_ldiv,
+                                Eigen::VectorXd& w_dz, Eigen::VectorXd& ds, Eigen::VectorXd& winv_ds) {
   const double* dzv = dz.data();
   const double* ld = ldiv.data();
   const double* t2 = w_ldiv.data();

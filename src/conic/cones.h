@@ -22,7 +22,7 @@ constexpr double kSqrtHalf = 0.70710678118654752440;
 
 // One second-order cone of the internal problem (rotated cones are already mapped to standard ones).
 struct SocBlock {
-  int start = 0;          // first row in z and s
+  int start = 0;  // first row in z and s
   int dim = 0;
   bool rotated = false;   // the first two rows were transformed
   bool expanded = false;  // scaling enters the KKT system by the sparse expansion
@@ -78,9 +78,9 @@ inline ExpandedCone ExpandCone(double w0) {
 
 struct Cones {
   // ---- layout ----
-  int num_rows = 0;     // m
+  int num_rows = 0;  // m
   int num_orthant = 0;
-  int degree = 0;       // barrier parameter: one per orthant row and per cone
+  int degree = 0;  // barrier parameter: one per orthant row and per cone
   std::vector<SocBlock> socs;
   // Per row: 0 normal, 1 first row of a rotated cone, 2 its second row.
   std::vector<signed char> row_kind;

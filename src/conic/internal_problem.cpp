@@ -14,8 +14,7 @@ bool InternalProblem::SamePattern(const Problem& problem) const {
       problem.cones.rotated_dims != spec.rotated_dims) {
     return false;
   }
-  auto same = [](const Eigen::SparseMatrix<double>& M, const std::vector<int>& ptr,
-                 const std::vector<int>& idx) {
+  auto same = [](const Eigen::SparseMatrix<double>& M, const std::vector<int>& ptr, const std::vector<int>& idx) {
     std::size_t q = 0;
     for (int j = 0; j < M.outerSize(); ++j) {
       if (ptr[j] != static_cast<int>(q)) return false;
@@ -34,8 +33,7 @@ void InternalProblem::Analyze(const Problem& problem, const Cones& cones, int kk
   m = problem.num_cone_rows();
   spec = problem.cones;
   num_kkt = kkt_size;
-  auto signature = [](const Eigen::SparseMatrix<double>& M, std::vector<int>& ptr,
-                      std::vector<int>& idx) {
+  auto signature = [](const Eigen::SparseMatrix<double>& M, std::vector<int>& ptr, std::vector<int>& idx) {
     ptr.assign(M.outerSize() + 1, 0);
     idx.clear();
     for (int j = 0; j < M.outerSize(); ++j) {

@@ -50,8 +50,8 @@ struct InternalProblem {
   int n = 0, p = 0, m = 0;
   // Size of the augmented KKT system: n + p + m + 2 per expanded cone (see Cones::Layout).
   int num_kkt = 0;
-  Csc A;  // p x n
-  Csc G;  // m x n, rotated rows transformed
+  Csc A;                    // p x n
+  Csc G;                    // m x n, rotated rows transformed
   Eigen::VectorXd c, b, h;  // h transformed
 
   // Pattern signature of the user's problem (what must match for reuse).

@@ -47,15 +47,15 @@ class AugmentedKkt final : public KktSystem {
   const InternalProblem& problem_;
   const Cones& cones_;
   std::int64_t max_factor_bytes_ = 0;  // 0: no limit
-  std::vector<int> perm, pinv;           // perm[new] = old, pinv[old] = new
-  std::vector<int> k_ptr, k_idx;         // permuted upper triangle, diagonal last in each column
+  std::vector<int> perm, pinv;         // perm[new] = old, pinv[old] = new
+  std::vector<int> k_ptr, k_idx;       // permuted upper triangle, diagonal last in each column
   std::vector<double> k_val;
-  std::vector<signed char> k_sign;       // expected pivot sign (permuted)
-  std::vector<double> k_reg;             // static regularization on the diagonal (permuted)
-  std::vector<int> diag_slot;            // unpermuted index -> slot of its diagonal
-  std::vector<int> a_slot, g_slot;       // per internal A / G entry -> slot of (col, row) entry
-  std::vector<int> dense_slots;          // per dense cone: strict upper triangle slots, row-major
-  std::vector<int> u_slots, v_slots;     // per expanded cone: slot of (z_i, u-row), (z_i, v-row)
+  std::vector<signed char> k_sign;    // expected pivot sign (permuted)
+  std::vector<double> k_reg;          // static regularization on the diagonal (permuted)
+  std::vector<int> diag_slot;         // unpermuted index -> slot of its diagonal
+  std::vector<int> a_slot, g_slot;    // per internal A / G entry -> slot of (col, row) entry
+  std::vector<int> dense_slots;       // per dense cone: strict upper triangle slots, row-major
+  std::vector<int> u_slots, v_slots;  // per expanded cone: slot of (z_i, u-row), (z_i, v-row)
   SparseLdl ldl;
   Eigen::VectorXd perm_rhs, perm_sol, perm_res, perm_corr;
 };
@@ -191,8 +191,10 @@ void AugmentedKkt::Analyze() {
     std::ostringstream m;
     m << "the KKT factor of " << num_kkt << " rows has " << nonzeros << " non-zeros with its fill-in (about "
       << static_cast<long long>(bytes / (1 << 20)) << " MiB), ";
-    if (nonzeros > std::numeric_limits<int>::max()) m << "more than 32-bit indices address";
-    else m << "above the memory budget of " << max_factor_bytes_ / (1 << 20) << " MiB for it";
+    if (nonzeros > std::numeric_limits<int>::max())
+      m << "more than 32-bit indices address";
+    else
+      m << "above the memory budget of " << max_factor_bytes_ / (1 << 20) << " MiB for it";
     throw std::invalid_argument(m.str());
   }
   ldl.Analyze(num_kkt, k_ptr, k_idx);

@@ -65,28 +65,27 @@ class ReducedKkt final : public KktSystem {
   const Cones& cones_;
   int num_expanded_ = 0;
   int nr = 0;
-  std::vector<int> r_pinv;              // unpermuted reduced unknown -> skyline row
-  std::vector<signed char> r_sign;      // expected pivot sign per skyline row
+  std::vector<int> r_pinv;          // unpermuted reduced unknown -> skyline row
+  std::vector<signed char> r_sign;  // expected pivot sign per skyline row
   SkylineLdl sky;
-  std::vector<int> r_diag_slot;         // per unpermuted reduced unknown
-  std::vector<int> r_a_slot;            // per internal A entry: slot of (y_i, x_j)
+  std::vector<int> r_diag_slot;  // per unpermuted reduced unknown
+  std::vector<int> r_a_slot;     // per internal A entry: slot of (y_i, x_j)
   // G by rows: row r has entries [gr_ptr[r], gr_ptr[r+1]) with column gr_col and index gr_val into G.val.
   std::vector<int> gr_ptr, gr_col, gr_val;
   // Rows scaled by a scalar (orthant rows, rows of expanded cones): slots of the products of their
   // entries e <= f (row-major over the row's entries), starting at pair_ptr[r].
   std::vector<int> pair_ptr, pair_slot;
-  std::vector<double> pair_coef;        // g_e g_f per pair (constant while the data are)
-  std::vector<double> cone_pair_coef;   // per dense-cone pair (a, b): (Gc' J Gc)_ab, constant
-  std::vector<double> r_constant;       // skyline values that do not change: A, +-delta, border +-1
+  std::vector<double> pair_coef;       // g_e g_f per pair (constant while the data are)
+  std::vector<double> cone_pair_coef;  // per dense-cone pair (a, b): (Gc' J Gc)_ab, constant
+  std::vector<double> r_constant;      // skyline values that do not change: A, +-delta, border +-1
   // Small (dense) and expanded cones: the union of the columns of their rows (cone_var_ptr per entry of
   // socs), each row entry's position in that union (gr_local), the slots of the union's pairs a <= b
   // (dense cones, from cone_pair_ptr) and the border slots (expanded cones, one per union column).
-  std::vector<int> cone_var_ptr, cone_var, gr_local, cone_pair_ptr, cone_pair_slot, border_u_slot,
-      border_v_slot;
-  std::vector<double> local_g;          // dense scratch of one cone
-  Eigen::VectorXd red1, red2;           // skyline-ordered vectors of size nr
+  std::vector<int> cone_var_ptr, cone_var, gr_local, cone_pair_ptr, cone_pair_slot, border_u_slot, border_v_slot;
+  std::vector<double> local_g;                    // dense scratch of one cone
+  Eigen::VectorXd red1, red2;                     // skyline-ordered vectors of size nr
   Eigen::VectorXd red_t1, red_t2, red_m1, red_n;  // sizes m, m, m, n
-  Eigen::VectorXd full_res, full_corr;  // size num_kkt
+  Eigen::VectorXd full_res, full_corr;            // size num_kkt
 };
 
 bool ReducedKkt::Analyze(bool automatic, const SolverOptions& options) {

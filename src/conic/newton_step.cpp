@@ -23,8 +23,8 @@ Solver::Workspace::StepOutcome Solver::Workspace::NewtonStep(const Options& opti
 
   // ---- predictor (affine scaling) ----
   double dtau_a = 0.0, dkappa_a = 0.0;
-  const double cone_step_a = Direction(options, denom, 1.0, tau * kappa, options.max_affine_refinement_steps,
-                                       true, &dtau_a, &dkappa_a);
+  const double cone_step_a =
+      Direction(options, denom, 1.0, tau * kappa, options.max_affine_refinement_steps, true, &dtau_a, &dkappa_a);
   const double alpha_a = std::min(1.0, MaxStep(cone_step_a, dtau_a, dkappa_a));
   double sigma = std::pow(1.0 - alpha_a, 3);
   sigma = std::min(1.0, std::max(0.0, sigma));
@@ -87,8 +87,7 @@ double Solver::Workspace::FactorAndSolve(const Options& options) {
     ++regularization_boosts;
     kkt->SetStaticRegularization(options.regularization_boost_factor * kkt->static_regularization());
   }
-  return data.c.dot(sol1.head(n)) + data.b.dot(sol1.segment(n, p)) + data.h.dot(sol1.segment(n + p, m)) -
-         kappa / tau;
+  return data.c.dot(sol1.head(n)) + data.b.dot(sol1.segment(n, p)) + data.h.dot(sol1.segment(n + p, m)) - kappa / tau;
 }
 
 void Solver::Workspace::DirectionRhs(bool corrector, double sigma_mu, double eta_r) {
@@ -104,8 +103,7 @@ double Solver::Workspace::Direction(const Options& options, double denom, double
   const int n = data.n, p = data.p, m = data.m;
   if (!solved) kkt->Solve(rhs2, sol2);
   const double numer = -eta_r * rtau + d_kappa / tau -
-                       (data.c.dot(sol2.head(n)) + data.b.dot(sol2.segment(n, p)) +
-                        data.h.dot(sol2.segment(n + p, m)));
+                       (data.c.dot(sol2.head(n)) + data.b.dot(sol2.segment(n, p)) + data.h.dot(sol2.segment(n + p, m)));
   *dtau = numer / denom;
   if (refinement_steps > 0) {
     // Refine the combined direction K (sol2 + dtau sol1) = rhs2 + dtau rhs1 once, instead of

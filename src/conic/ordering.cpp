@@ -63,9 +63,8 @@ std::vector<int> ReverseCuthillMcKee(int nodes, const std::vector<int>& adj_ptr,
           neighbours.push_back(adj[q]);
         }
       }
-      std::sort(neighbours.begin(), neighbours.end(), [&](int a, int b) {
-        return degree(a) != degree(b) ? degree(a) < degree(b) : a < b;
-      });
+      std::sort(neighbours.begin(), neighbours.end(),
+                [&](int a, int b) { return degree(a) != degree(b) ? degree(a) < degree(b) : a < b; });
       order.insert(order.end(), neighbours.begin(), neighbours.end());
     }
   }

@@ -14,9 +14,7 @@ int ConeSpec::NumRows() const {
   return static_cast<int>(rows);
 }
 
-int ConeSpec::Degree() const {
-  return num_nonnegative + static_cast<int>(soc_dims.size() + rotated_dims.size());
-}
+int ConeSpec::Degree() const { return num_nonnegative + static_cast<int>(soc_dims.size() + rotated_dims.size()); }
 
 namespace {
 
@@ -38,8 +36,8 @@ void CheckMatrix(const Eigen::SparseMatrix<double>& M, const char* name) {
     for (Eigen::SparseMatrix<double>::InnerIterator it(M, j); it; ++it) {
       if (!std::isfinite(it.value())) {
         std::ostringstream os;
-        os << name << " has " << (std::isnan(it.value()) ? "NaN" : "Inf") << " at (" << it.row()
-           << ", " << it.col() << ")";
+        os << name << " has " << (std::isnan(it.value()) ? "NaN" : "Inf") << " at (" << it.row() << ", " << it.col()
+           << ")";
         Fail(os.str());
       }
     }
@@ -51,30 +49,25 @@ void CheckMatrix(const Eigen::SparseMatrix<double>& M, const char* name) {
 void Problem::Validate() const {
   const Eigen::Index n = c.size();
   if (A.cols() != n) {
-    Fail("A has " + std::to_string(A.cols()) + " columns but c has " + std::to_string(n) +
-         " entries");
+    Fail("A has " + std::to_string(A.cols()) + " columns but c has " + std::to_string(n) + " entries");
   }
   if (A.rows() != b.size()) {
-    Fail("A has " + std::to_string(A.rows()) + " rows but b has " + std::to_string(b.size()) +
-         " entries");
+    Fail("A has " + std::to_string(A.rows()) + " rows but b has " + std::to_string(b.size()) + " entries");
   }
   if (G.cols() != n) {
-    Fail("G has " + std::to_string(G.cols()) + " columns but c has " + std::to_string(n) +
-         " entries");
+    Fail("G has " + std::to_string(G.cols()) + " columns but c has " + std::to_string(n) + " entries");
   }
   if (cones.num_nonnegative < 0) {
     Fail("num_nonnegative is " + std::to_string(cones.num_nonnegative) + ", expected >= 0");
   }
   for (std::size_t k = 0; k < cones.soc_dims.size(); ++k) {
     if (cones.soc_dims[k] < 1) {
-      Fail("soc_dims[" + std::to_string(k) + "] is " + std::to_string(cones.soc_dims[k]) +
-           ", expected >= 1");
+      Fail("soc_dims[" + std::to_string(k) + "] is " + std::to_string(cones.soc_dims[k]) + ", expected >= 1");
     }
   }
   for (std::size_t k = 0; k < cones.rotated_dims.size(); ++k) {
     if (cones.rotated_dims[k] < 2) {
-      Fail("rotated_dims[" + std::to_string(k) + "] is " + std::to_string(cones.rotated_dims[k]) +
-           ", expected >= 2");
+      Fail("rotated_dims[" + std::to_string(k) + "] is " + std::to_string(cones.rotated_dims[k]) + ", expected >= 2");
     }
   }
   const int m = cones.NumRows();

@@ -18,8 +18,8 @@ int ProblemBuilder::AddVariables(int n) {
 
 void ProblemBuilder::CheckVariable(int var, const char* where) const {
   if (var < 0 || var >= num_variables_) {
-    throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(var) +
-                                " does not exist (" + std::to_string(num_variables_) + " variables)");
+    throw std::invalid_argument(std::string(where) + ": variable " + std::to_string(var) + " does not exist (" +
+                                std::to_string(num_variables_) + " variables)");
   }
 }
 
@@ -39,8 +39,7 @@ void ProblemBuilder::AddEquality(const std::vector<Term>& terms, double rhs) {
   equality_rhs_.push_back(rhs);
 }
 
-ProblemBuilder::Row ProblemBuilder::AppendRow(const std::vector<Term>& terms, double term_sign,
-                                              double constant) {
+ProblemBuilder::Row ProblemBuilder::AppendRow(const std::vector<Term>& terms, double term_sign, double constant) {
   Row row{static_cast<int>(terms_.size()), 0, constant};
   for (const Term& t : terms) terms_.push_back(Term{t.var, term_sign * t.coef});
   row.end = static_cast<int>(terms_.size());
@@ -66,8 +65,7 @@ void ProblemBuilder::AddSecondOrderCone(const std::vector<AffineExpr>& rows) {
 
 void ProblemBuilder::AddRotatedCone(const std::vector<AffineExpr>& rows) {
   if (rows.size() < 2) {
-    throw std::invalid_argument("AddRotatedCone: rows has " + std::to_string(rows.size()) +
-                                " entries, expected >= 2");
+    throw std::invalid_argument("AddRotatedCone: rows has " + std::to_string(rows.size()) + " entries, expected >= 2");
   }
   for (const AffineExpr& e : rows) CheckTerms(e.terms, "AddRotatedCone");
   for (const AffineExpr& e : rows) rotated_rows_.push_back(AppendRow(e.terms, 1.0, e.constant));
@@ -140,8 +138,7 @@ Problem ProblemBuilder::Build() const {
 
   // A cone row means constant + sum(terms) in K, i.e. s = h - G x with h = constant, G = -terms.
   const int m = num_cone_rows();
-  const std::initializer_list<const std::vector<Row>*> cone_rows = {&orthant_rows_, &soc_rows_,
-                                                                    &rotated_rows_};
+  const std::initializer_list<const std::vector<Row>*> cone_rows = {&orthant_rows_, &soc_rows_, &rotated_rows_};
   problem.h.resize(m);
   int r = 0;
   for (const std::vector<Row>* rows : cone_rows) {

@@ -33,11 +33,9 @@ void MeasureResult(const Problem& problem, Result& result) {
     result.primal_residual = std::max(ninf(Ax), ninf(Gx + result.s));
     result.dual_residual = 0.0;
   } else {
-    result.primal_residual =
-        std::max(ninf(Ax - problem.b), ninf(Gx + result.s - problem.h)) /
-        std::max({1.0, ninf(problem.b), ninf(problem.h), ninf(Ax), ninf(Gx), ninf(result.s)});
-    result.dual_residual = ninf(problem.c + Aty + Gtz) /
-                           std::max({1.0, ninf(problem.c), ninf(Aty), ninf(Gtz)});
+    result.primal_residual = std::max(ninf(Ax - problem.b), ninf(Gx + result.s - problem.h)) /
+                             std::max({1.0, ninf(problem.b), ninf(problem.h), ninf(Ax), ninf(Gx), ninf(result.s)});
+    result.dual_residual = ninf(problem.c + Aty + Gtz) / std::max({1.0, ninf(problem.c), ninf(Aty), ninf(Gtz)});
   }
 }
 

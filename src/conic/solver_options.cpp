@@ -12,39 +12,44 @@ namespace timeopt::conic {
 
 const char* ToString(Status status) {
   switch (status) {
-    case Status::kOptimal: return "optimal";
-    case Status::kPrimalInfeasible: return "primal_infeasible";
-    case Status::kDualInfeasible: return "dual_infeasible";
-    case Status::kIterationLimit: return "iteration_limit";
-    case Status::kNumericalError: return "numerical_error";
-    case Status::kNotSolved: return "not_solved";
+    case Status::kOptimal:
+      return "optimal";
+    case Status::kPrimalInfeasible:
+      return "primal_infeasible";
+    case Status::kDualInfeasible:
+      return "dual_infeasible";
+    case Status::kIterationLimit:
+      return "iteration_limit";
+    case Status::kNumericalError:
+      return "numerical_error";
+    case Status::kNotSolved:
+      return "not_solved";
   }
   return "unknown";
 }
 
 const char* ToString(KktMethod method) {
   switch (method) {
-    case KktMethod::kAutomatic: return "automatic";
-    case KktMethod::kAugmentedSparse: return "augmented_sparse";
-    case KktMethod::kReducedBanded: return "reduced_banded";
+    case KktMethod::kAutomatic:
+      return "automatic";
+    case KktMethod::kAugmentedSparse:
+      return "augmented_sparse";
+    case KktMethod::kReducedBanded:
+      return "reduced_banded";
   }
   return "unknown";
 }
 
-bool FromString(const std::string& text, Status* status) {
-  return EnumFromString(text, kStatuses, status);
-}
+bool FromString(const std::string& text, Status* status) { return EnumFromString(text, kStatuses, status); }
 
-bool FromString(const std::string& text, KktMethod* method) {
-  return EnumFromString(text, kKktMethods, method);
-}
+bool FromString(const std::string& text, KktMethod* method) { return EnumFromString(text, kKktMethods, method); }
 
 std::string Result::BriefReport() const {
   char buffer[320];
   std::snprintf(buffer, sizeof(buffer),
-                "%s: primal %.10g dual %.10g gap %.2e pres %.2e dres %.2e, %d iterations, %.3f ms",
-                ToString(status), primal_objective, dual_objective, gap, primal_residual,
-                dual_residual, iterations, 1e3 * solve_time_seconds);
+                "%s: primal %.10g dual %.10g gap %.2e pres %.2e dres %.2e, %d iterations, %.3f ms", ToString(status),
+                primal_objective, dual_objective, gap, primal_residual, dual_residual, iterations,
+                1e3 * solve_time_seconds);
   std::string report(buffer);
   if (!message.empty()) report += " (" + message + ")";
   return report;

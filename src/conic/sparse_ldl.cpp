@@ -105,8 +105,7 @@ void SparseLdl::Analyze(int n, const std::vector<int>& col_ptr, const std::vecto
   num_regularized_ = 0;
 }
 
-int SparseLdl::Factor(const double* values, const signed char* signs, double threshold,
-                      double replacement) {
+int SparseLdl::Factor(const double* values, const signed char* signs, double threshold, double replacement) {
   int regularized = 0;
   double* work = work_.data();
   double* lx = l_val_.data();

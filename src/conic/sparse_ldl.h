@@ -47,15 +47,15 @@ class SparseLdl {
   int n_ = 0;
   std::vector<int> a_col_ptr_;
   std::vector<int> a_row_;
-  std::vector<int> l_col_ptr_;   // column pointers of L (strictly lower part)
-  std::vector<int> l_row_;       // row index of each entry of L
+  std::vector<int> l_col_ptr_;  // column pointers of L (strictly lower part)
+  std::vector<int> l_row_;      // row index of each entry of L
   std::vector<double> l_val_;
   std::vector<double> d_;
   std::vector<double> inv_d_;
   std::vector<double> l_row_val_;  // values of L in the order of row_col_ (row-wise copy)
-  std::vector<int> row_ptr_;     // row k of L: pattern row_col_[row_ptr_[k] .. row_ptr_[k+1])
-  std::vector<int> row_col_;     // columns i < k with L(k, i) != 0, increasing (a topological order)
-  std::vector<int> row_slot_;    // slot of L(k, i) in l_val_
+  std::vector<int> row_ptr_;       // row k of L: pattern row_col_[row_ptr_[k] .. row_ptr_[k+1])
+  std::vector<int> row_col_;       // columns i < k with L(k, i) != 0, increasing (a topological order)
+  std::vector<int> row_slot_;      // slot of L(k, i) in l_val_
   mutable std::vector<double> work_;
   std::vector<int> regularized_;
   int num_regularized_ = 0;

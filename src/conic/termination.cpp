@@ -11,8 +11,7 @@
 namespace timeopt::conic::internal {
 
 Termination::Decision Termination::Check(const IterateMeasures& it, int iteration, double step, bool reduced_method,
-                                         const CertificateData& data,
-                                         const std::function<double()>& elapsed_seconds) {
+                                         const CertificateData& data, const std::function<double()>& elapsed_seconds) {
   Decision decision;
   auto stop = [&decision](Status status, std::string message) {
     decision.action = Action::kStop;
@@ -25,10 +24,9 @@ Termination::Decision Termination::Check(const IterateMeasures& it, int iteratio
   }
   const double pd_gap = std::abs(it.pcost - it.dcost);
   const double gap_scale = std::min(std::abs(it.pcost), std::abs(it.dcost));
-  const bool gap_ok = (it.gap <= options_.absolute_gap_tolerance ||
-                       it.gap <= options_.relative_gap_tolerance * gap_scale) &&
-                      (pd_gap <= options_.absolute_gap_tolerance ||
-                       pd_gap <= options_.relative_gap_tolerance * gap_scale);
+  const bool gap_ok =
+      (it.gap <= options_.absolute_gap_tolerance || it.gap <= options_.relative_gap_tolerance * gap_scale) &&
+      (pd_gap <= options_.absolute_gap_tolerance || pd_gap <= options_.relative_gap_tolerance * gap_scale);
   if (it.pres <= options_.feasibility_tolerance && it.dres <= options_.feasibility_tolerance && gap_ok) {
     return stop(Status::kOptimal, "tolerances met");
   }
@@ -41,13 +39,13 @@ Termination::Decision Termination::Check(const IterateMeasures& it, int iteratio
   return decision;
 }
 
-bool Termination::CheckMerit(const IterateMeasures& it, double pd_gap, double gap_scale, int iteration,
-                             double step, bool reduced_method, Decision* decision) {
+bool Termination::CheckMerit(const IterateMeasures& it, double pd_gap, double gap_scale, int iteration, double step,
+                             bool reduced_method, Decision* decision) {
   const double worst_gap = std::max(it.gap, pd_gap);
-  const double gap_merit = std::min(worst_gap / options_.absolute_gap_tolerance,
-                                    worst_gap / (options_.relative_gap_tolerance * gap_scale));
-  const double merit = std::max({it.pres / options_.feasibility_tolerance,
-                                 it.dres / options_.feasibility_tolerance, gap_merit});
+  const double gap_merit =
+      std::min(worst_gap / options_.absolute_gap_tolerance, worst_gap / (options_.relative_gap_tolerance * gap_scale));
+  const double merit =
+      std::max({it.pres / options_.feasibility_tolerance, it.dres / options_.feasibility_tolerance, gap_merit});
   // Lookback: a full step from an iterate near the tolerances that does not end the solve may have
   // traded one criterion for another (the gap met, the primal residual spoiled by rounding in the
   // last solves); the midpoint of that step often meets all of them. It is measured once per step
@@ -66,8 +64,8 @@ bool Termination::CheckMerit(const IterateMeasures& it, double pd_gap, double ga
     decision->save_best = true;
     // The reduced tolerances never ask for more than the strict ones.
     const double reduced_feas = std::max(options_.reduced_feasibility_tolerance, options_.feasibility_tolerance);
-    const double reduced_gap = std::max({options_.reduced_gap_tolerance, options_.absolute_gap_tolerance,
-                                         options_.relative_gap_tolerance});
+    const double reduced_gap =
+        std::max({options_.reduced_gap_tolerance, options_.absolute_gap_tolerance, options_.relative_gap_tolerance});
     best_reduced_ok_ = it.pres <= reduced_feas && it.dres <= reduced_feas &&
                        (worst_gap <= reduced_gap || worst_gap <= reduced_gap * gap_scale);
   }
@@ -87,8 +85,8 @@ bool Termination::CheckMerit(const IterateMeasures& it, double pd_gap, double ga
       decision->status = Status::kNumericalError;
       char factor[32];
       std::snprintf(factor, sizeof(factor), "%g", options_.divergence_merit_factor);
-      decision->message = std::string("the merit rose ") + factor +
-                          "-fold from the best iterate (rounding near the optimum)";
+      decision->message =
+          std::string("the merit rose ") + factor + "-fold from the best iterate (rounding near the optimum)";
       return false;
     }
     // The reduced method forms G'W^{-2}G, whose rounding can spoil the direction when the scaling
@@ -102,8 +100,8 @@ bool Termination::CheckMerit(const IterateMeasures& it, double pd_gap, double ga
   }
   // Near the optimum (the best iterate meets the reduced tolerances) a short stall ends the
   // iteration; elsewhere slow phases are normal, so the window is longer.
-  const int window = best_reduced_ok_ ? options_.stall_iterations
-                                      : options_.slow_phase_stall_factor * options_.stall_iterations;
+  const int window =
+      best_reduced_ok_ ? options_.stall_iterations : options_.slow_phase_stall_factor * options_.stall_iterations;
   if (iteration - progress_iteration_ >= window) {
     decision->action = Action::kStop;
     decision->status = Status::kNumericalError;

@@ -72,8 +72,8 @@ class Termination {
   bool CheckMerit(const IterateMeasures& it, double pd_gap, double gap_scale, int iteration, double step,
                   bool reduced_method, Decision* decision);
   // Certificates of primal or dual infeasibility, once kappa > tau.
-  static bool CheckInfeasibility(const IterateMeasures& it, const CertificateData& data,
-                                 const SolverOptions& options, Decision* decision);
+  static bool CheckInfeasibility(const IterateMeasures& it, const CertificateData& data, const SolverOptions& options,
+                                 Decision* decision);
 
   const SolverOptions& options_;
   int best_iteration_ = -1;   // iteration of the best iterate

@@ -8,7 +8,8 @@ namespace timeopt::conic {
 bool Solver::Workspace::PatternMatches(const Problem& problem, const Options& options) const {
   if (!analyzed || options.sparse_cone_min_dimension != sparse_min_dim || options.kkt_method != method_option ||
       options.reduced_max_expanded_cones != reduced_max_expanded_cones ||
-      options.reduced_max_profile_per_row != reduced_max_profile_per_row || options.max_factor_bytes != max_factor_bytes) {
+      options.reduced_max_profile_per_row != reduced_max_profile_per_row ||
+      options.max_factor_bytes != max_factor_bytes) {
     return false;
   }
   return data.SamePattern(problem);
@@ -35,8 +36,8 @@ void Solver::Workspace::Analyze(const Problem& problem, const Options& options) 
   // ---- work memory ----
   for (Eigen::VectorXd* v : {&x, &rx, &Aty, &Gtz, &dx, &best_x}) v->setZero(n);
   for (Eigen::VectorXd* v : {&y, &ry, &Ax, &dy, &best_y}) v->setZero(p);
-  for (Eigen::VectorXd* v : {&z, &s, &rz, &Gx, &dz, &ds, &ds_aff, &dz_aff, &dtmp1, &dtmp2, &dtmp3, &ldiv, &best_z,
-                             &best_s}) {
+  for (Eigen::VectorXd* v :
+       {&z, &s, &rz, &Gx, &dz, &ds, &ds_aff, &dz_aff, &dtmp1, &dtmp2, &dtmp3, &ldiv, &best_z, &best_s}) {
     v->setZero(m);
   }
   for (Eigen::VectorXd* v : {&rhs1, &sol1, &rhs2, &sol2}) v->setZero(num_kkt);
@@ -102,8 +103,8 @@ internal::IterateMeasures Solver::Workspace::Measure(double norm_c, double norm_
   it.pres = std::max(NormInf(ry.data(), p), NormInf(rz.data(), m)) / tau /
             std::max({1.0, norm_b, norm_h, NormInf(Ax.data(), p) / tau, NormInf(Gx.data(), m) / tau,
                       NormInf(s.data(), m) / tau});
-  it.dres = NormInf(rx.data(), n) / tau /
-            std::max({1.0, norm_c, NormInf(Aty.data(), n) / tau, NormInf(Gtz.data(), n) / tau});
+  it.dres =
+      NormInf(rx.data(), n) / tau / std::max({1.0, norm_c, NormInf(Aty.data(), n) / tau, NormInf(Gtz.data(), n) / tau});
   return it;
 }
 

@@ -36,9 +36,9 @@ struct Solver::Workspace {
   // ---------------- iterates and work vectors ----------------
   Eigen::VectorXd x, y, z, s;
   double tau = 1.0, kappa = 1.0;
-  Eigen::VectorXd rx, ry, rz;        // residuals of the homogeneous embedding
-  double rtau = 0.0;                 // its tau row: kappa + c'x + b'y + h'z
-  Eigen::VectorXd Ax, Gx, Aty, Gtz;  // products
+  Eigen::VectorXd rx, ry, rz;              // residuals of the homogeneous embedding
+  double rtau = 0.0;                       // its tau row: kappa + c'x + b'y + h'z
+  Eigen::VectorXd Ax, Gx, Aty, Gtz;        // products
   Eigen::VectorXd rhs1, sol1, rhs2, sol2;  // unpermuted KKT vectors of size num_kkt
   // A direction (dx, dy, dz, ds), W^{-1} ds and W dz (ds_aff, dz_aff: after the predictor, its
   // direction, which the corrector's right-hand side uses), lambda \ d_s (ldiv) and W ldiv (dtmp2);
@@ -78,10 +78,10 @@ struct Solver::Workspace {
 
   // ---------------- Newton step (newton_step.cpp) ----------------
   struct StepOutcome {
-    double step = 0.0;        // step length taken
-    double sigma = 0.0;       // centering parameter
-    int refinements = 0;      // refinement steps of this iteration
-    std::string failure;      // non-empty: no step was taken, and why
+    double step = 0.0;    // step length taken
+    double sigma = 0.0;   // centering parameter
+    int refinements = 0;  // refinement steps of this iteration
+    std::string failure;  // non-empty: no step was taken, and why
   };
   // One predictor-corrector step from the iterate measured by `it`.
   StepOutcome NewtonStep(const Options& options, const internal::IterateMeasures& it, int iteration);
@@ -93,8 +93,8 @@ struct Solver::Workspace {
   void DirectionRhs(bool corrector, double sigma_mu, double eta_r);
   // Completes the direction whose rhs2 is set and (if `solved`) solved into sol2: dx, dy, dz, ds,
   // W^{-1} ds and W dz (ds_aff, dz_aff); sets *dtau, *dkappa and returns the cones' step limit.
-  double Direction(const Options& options, double denom, double eta_r, double d_kappa,
-                   int refinement_steps, bool solved, double* dtau, double* dkappa);
+  double Direction(const Options& options, double denom, double eta_r, double d_kappa, int refinement_steps,
+                   bool solved, double* dtau, double* dkappa);
   // The largest step keeping cones, tau and kappa non-negative, given the cones' limit.
   double MaxStep(double cone_step, double dtau, double dkappa) const;
   // Shortens *step until the trial point is strictly inside; false if none above min_step is.

@@ -8,7 +8,10 @@
 namespace timeopt::internal {
 
 BandedSystem::BandedSystem(int n, int kl, int ku)
-    : n_(n), kl_(kl), ku_(ku), width_(2 * kl + ku + 1),
+    : n_(n),
+      kl_(kl),
+      ku_(ku),
+      width_(2 * kl + ku + 1),
       storage_(static_cast<size_t>(n) * static_cast<size_t>(2 * kl + ku + 1), 0.0) {
   if (n < 1 || kl < 0 || ku < 0) throw std::logic_error("BandedSystem: bad dimensions");
 }
@@ -43,8 +46,7 @@ Eigen::MatrixXd BandedSystem::Solve(const Eigen::MatrixXd& rhs, double singular_
       if (std::abs(At(a, i, k)) > std::abs(At(a, pivot, k))) pivot = i;
     }
     if (std::abs(At(a, pivot, k)) <= tiny) {
-      throw std::runtime_error("banded solve: the system is singular at unknown " +
-                               std::to_string(k));
+      throw std::runtime_error("banded solve: the system is singular at unknown " + std::to_string(k));
     }
     if (pivot != k) {
       for (int j = k; j <= last_col; ++j) std::swap(At(a, k, j), At(a, pivot, j));

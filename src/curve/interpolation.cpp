@@ -16,8 +16,7 @@ void CheckWaypoints(const Waypoints& waypoints, const char* who) {
   }
   for (int i = 0; i < waypoints.cols(); ++i) {
     if (!waypoints.col(i).allFinite()) {
-      throw std::invalid_argument(std::string(who) + ": waypoint " + std::to_string(i) +
-                                  " is not finite");
+      throw std::invalid_argument(std::string(who) + ": waypoint " + std::to_string(i) + " is not finite");
     }
   }
 }
@@ -31,12 +30,8 @@ void CheckOptional(const std::optional<Eigen::Vector3d>& v, const char* name) {
 // Quintic Hermite basis on [0, 1]: coefficients (ascending) = H * [p0 v0 a0 p1 v1 a1]'.
 Eigen::Matrix<double, 6, 6> QuinticHermite() {
   Eigen::Matrix<double, 6, 6> h;
-  h << 1, 0, 0, 0, 0, 0,
-       0, 1, 0, 0, 0, 0,
-       0, 0, 0.5, 0, 0, 0,
-       -10, -6, -1.5, 10, -4, 0.5,
-       15, 8, 1.5, -15, 7, -1,
-       -6, -3, -0.5, 6, -3, 0.5;
+  h << 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0.5, 0, 0, 0, -10, -6, -1.5, 10, -4, 0.5, 15, 8, 1.5, -15, 7, -1, -6,
+      -3, -0.5, 6, -3, 0.5;
   return h;
 }
 
@@ -97,8 +92,7 @@ PiecewiseCurve MinimumJerkSpline(const Waypoints& p, const EndDerivatives& ends)
   CheckOptional(ends.end_velocity, "end_velocity");
   CheckOptional(ends.end_acceleration, "end_acceleration");
   const int m = static_cast<int>(p.cols()) - 1;
-  if (m == 1 && !ends.start_velocity && !ends.start_acceleration && !ends.end_velocity &&
-      !ends.end_acceleration) {
+  if (m == 1 && !ends.start_velocity && !ends.start_acceleration && !ends.end_velocity && !ends.end_acceleration) {
     throw std::invalid_argument(
         "MinimumJerkSpline: with 2 waypoints and all end derivatives free the minimum is not "
         "unique (every quadratic through the points has zero jerk); give at least one end "
@@ -114,8 +108,7 @@ PiecewiseCurve MinimumJerkSpline(const Waypoints& p, const EndDerivatives& ends)
 
   // Adds weight * (row * H) * [p_k v_k a_k p_{k+1} v_{k+1} a_{k+1}] to equation `eq`: the
   // velocity/acceleration parts go to the matrix, the known positions to the right-hand side.
-  const auto add_piece_row = [&](int eq, int piece, const Eigen::Matrix<double, 1, 6>& row,
-                                 double weight) {
+  const auto add_piece_row = [&](int eq, int piece, const Eigen::Matrix<double, 1, 6>& row, double weight) {
     const Eigen::Matrix<double, 1, 6> r = weight * row * H;
     for (int end = 0; end < 2; ++end) {
       const int knot = piece + end;
@@ -131,10 +124,14 @@ PiecewiseCurve MinimumJerkSpline(const Waypoints& p, const EndDerivatives& ends)
 
   // Start knot: given derivative, or the natural condition (free velocity: snap = 0; free
   // acceleration: jerk = 0).
-  if (ends.start_velocity) fix(0, 0, *ends.start_velocity);
-  else add_piece_row(0, 0, DerivativeRow(4, 0.0), 1.0);
-  if (ends.start_acceleration) fix(1, 1, *ends.start_acceleration);
-  else add_piece_row(1, 0, DerivativeRow(3, 0.0), 1.0);
+  if (ends.start_velocity)
+    fix(0, 0, *ends.start_velocity);
+  else
+    add_piece_row(0, 0, DerivativeRow(4, 0.0), 1.0);
+  if (ends.start_acceleration)
+    fix(1, 1, *ends.start_acceleration);
+  else
+    add_piece_row(1, 0, DerivativeRow(3, 0.0), 1.0);
   // Interior knots: jerk and snap continuous (the optimality conditions of the jerk integral).
   for (int i = 1; i < m; ++i) {
     add_piece_row(2 * i, i - 1, DerivativeRow(3, 1.0), 1.0);
@@ -142,10 +139,14 @@ PiecewiseCurve MinimumJerkSpline(const Waypoints& p, const EndDerivatives& ends)
     add_piece_row(2 * i + 1, i - 1, DerivativeRow(4, 1.0), 1.0);
     add_piece_row(2 * i + 1, i, DerivativeRow(4, 0.0), -1.0);
   }
-  if (ends.end_velocity) fix(2 * m, 2 * m, *ends.end_velocity);
-  else add_piece_row(2 * m, m - 1, DerivativeRow(4, 1.0), 1.0);
-  if (ends.end_acceleration) fix(2 * m + 1, 2 * m + 1, *ends.end_acceleration);
-  else add_piece_row(2 * m + 1, m - 1, DerivativeRow(3, 1.0), 1.0);
+  if (ends.end_velocity)
+    fix(2 * m, 2 * m, *ends.end_velocity);
+  else
+    add_piece_row(2 * m, m - 1, DerivativeRow(4, 1.0), 1.0);
+  if (ends.end_acceleration)
+    fix(2 * m + 1, 2 * m + 1, *ends.end_acceleration);
+  else
+    add_piece_row(2 * m + 1, m - 1, DerivativeRow(3, 1.0), 1.0);
 
   const Eigen::MatrixXd va = system.Solve(rhs);
   std::vector<PolynomialPiece> pieces;

@@ -24,8 +24,8 @@ PiecewiseCurve::PiecewiseCurve(std::vector<PolynomialPiece> pieces) : pieces_(st
 
 const PolynomialPiece& PiecewiseCurve::piece(int i) const {
   if (i < 0 || i >= num_pieces()) {
-    throw std::out_of_range("PiecewiseCurve: piece index " + std::to_string(i) +
-                            " outside [0, " + std::to_string(num_pieces()) + ")");
+    throw std::out_of_range("PiecewiseCurve: piece index " + std::to_string(i) + " outside [0, " +
+                            std::to_string(num_pieces()) + ")");
   }
   return pieces_[static_cast<size_t>(i)];
 }
@@ -52,8 +52,7 @@ Eigen::Vector3d PiecewiseCurve::EvaluateGlobal(double sigma, int derivative) con
 
 ContinuityReport PiecewiseCurve::Continuity(int max_order) const {
   if (max_order < 0) {
-    throw std::invalid_argument("PiecewiseCurve::Continuity: max_order must be >= 0, got " +
-                                std::to_string(max_order));
+    throw std::invalid_argument("PiecewiseCurve::Continuity: max_order must be >= 0, got " + std::to_string(max_order));
   }
   ContinuityReport report;
   report.jump.assign(static_cast<size_t>(max_order) + 1, 0.0);
@@ -74,8 +73,8 @@ namespace {
 
 // Adaptive Simpson on g over [a, b]; whole = Simpson estimate over [a, b].
 template <typename F>
-double AdaptiveSimpson(const F& g, double a, double b, double fa, double fm, double fb,
-                       double whole, double tolerance, int depth, long* budget) {
+double AdaptiveSimpson(const F& g, double a, double b, double fa, double fm, double fb, double whole, double tolerance,
+                       int depth, long* budget) {
   const double m = 0.5 * (a + b);
   *budget -= 2;
   const double lm = 0.5 * (a + m), rm = 0.5 * (m + b);

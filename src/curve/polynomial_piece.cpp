@@ -18,16 +18,15 @@ double FallingFactorial(int n, int k) {
 
 PolynomialPiece::PolynomialPiece() : coefficients_(Coefficients::Zero(3, 1)) {}
 
-PolynomialPiece::PolynomialPiece(Coefficients coefficients)
-    : coefficients_(std::move(coefficients)) {
+PolynomialPiece::PolynomialPiece(Coefficients coefficients) : coefficients_(std::move(coefficients)) {
   if (coefficients_.cols() < 1) {
     throw std::invalid_argument("PolynomialPiece: expected at least 1 coefficient per axis, got 0");
   }
   for (int j = 0; j < coefficients_.cols(); ++j) {
     for (int a = 0; a < 3; ++a) {
       if (!std::isfinite(coefficients_(a, j))) {
-        throw std::invalid_argument("PolynomialPiece: coefficient " + std::to_string(j) +
-                                    " of axis " + "xyz"[a] + " is not finite");
+        throw std::invalid_argument("PolynomialPiece: coefficient " + std::to_string(j) + " of axis " + "xyz"[a] +
+                                    " is not finite");
       }
     }
   }
@@ -47,8 +46,7 @@ Eigen::Vector3d PolynomialPiece::Evaluate(double s, int derivative) const {
   return value;
 }
 
-Eigen::Matrix<double, 3, Eigen::Dynamic> PolynomialPiece::EvaluateAll(double s,
-                                                                     int max_derivative) const {
+Eigen::Matrix<double, 3, Eigen::Dynamic> PolynomialPiece::EvaluateAll(double s, int max_derivative) const {
   if (max_derivative < 0) {
     throw std::invalid_argument("PolynomialPiece::EvaluateAll: max_derivative must be >= 0, got " +
                                 std::to_string(max_derivative));
@@ -60,8 +58,7 @@ Eigen::Matrix<double, 3, Eigen::Dynamic> PolynomialPiece::EvaluateAll(double s,
 
 PolynomialPiece PolynomialPiece::Derivative(int order) const {
   if (order < 0) {
-    throw std::invalid_argument("PolynomialPiece::Derivative: order must be >= 0, got " +
-                                std::to_string(order));
+    throw std::invalid_argument("PolynomialPiece::Derivative: order must be >= 0, got " + std::to_string(order));
   }
   const int n = degree();
   if (order > n) return PolynomialPiece();
@@ -74,8 +71,8 @@ PolynomialPiece PolynomialPiece::Derivative(int order) const {
 
 PolynomialPiece PolynomialPiece::WithDegree(int new_degree) const {
   if (new_degree < degree()) {
-    throw std::invalid_argument("PolynomialPiece::WithDegree: cannot lower degree " +
-                                std::to_string(degree()) + " to " + std::to_string(new_degree));
+    throw std::invalid_argument("PolynomialPiece::WithDegree: cannot lower degree " + std::to_string(degree()) +
+                                " to " + std::to_string(new_degree));
   }
   Coefficients result = Coefficients::Zero(3, new_degree + 1);
   result.leftCols(coefficients_.cols()) = coefficients_;

@@ -6,15 +6,17 @@
 
 namespace timeopt {
 
-std::string ConicResultToJson(const conic::CbfModel& model, const conic::Result& result,
-                              double solve_time_seconds, int indent) {
+std::string ConicResultToJson(const conic::CbfModel& model, const conic::Result& result, double solve_time_seconds,
+                              int indent) {
   nlohmann::ordered_json j;
   j["status"] = conic::ToString(result.status);
   j["message"] = result.message;
   // Only an optimal solve has an objective value; otherwise x is a certificate or an unconverged
   // iterate.
-  if (result.is_success()) j["objective"] = model.FileObjective(result.primal_objective);
-  else j["objective"] = nullptr;
+  if (result.is_success())
+    j["objective"] = model.FileObjective(result.primal_objective);
+  else
+    j["objective"] = nullptr;
   j["iterations"] = result.iterations;
   j["solve_time_ms"] = (solve_time_seconds >= 0.0 ? solve_time_seconds : result.solve_time_seconds) * 1e3;
   j["reduced_accuracy"] = result.reduced_accuracy;

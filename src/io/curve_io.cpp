@@ -55,14 +55,13 @@ std::vector<double> CsvNumbers(const std::string& row, const std::string& where)
   return values;
 }
 
-std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field,
-                                int expected_size) {
+std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field, int expected_size) {
   if (!j.is_array()) {
     throw std::invalid_argument(field + ": expected an array, got " + std::string(j.type_name()));
   }
   if (expected_size >= 0 && static_cast<int>(j.size()) != expected_size) {
-    throw std::invalid_argument(field + ": expected " + std::to_string(expected_size) +
-                                " numbers, got " + std::to_string(j.size()));
+    throw std::invalid_argument(field + ": expected " + std::to_string(expected_size) + " numbers, got " +
+                                std::to_string(j.size()));
   }
   std::vector<double> out;
   out.reserve(j.size());
@@ -82,12 +81,10 @@ CurveFile CurveFromJson(const nlohmann::json& j, const std::string& context) {
   }
   std::optional<std::vector<double>> durations;
   if (j.contains("durations")) {
-    durations = FiniteArray(j.at("durations"), context + ".durations",
-                            static_cast<int>(pieces_json.size()));
+    durations = FiniteArray(j.at("durations"), context + ".durations", static_cast<int>(pieces_json.size()));
     for (size_t i = 0; i < durations->size(); ++i) {
       if (!((*durations)[i] > 0.0)) {
-        throw std::invalid_argument(context + ".durations[" + std::to_string(i) +
-                                    "]: expected a positive duration");
+        throw std::invalid_argument(context + ".durations[" + std::to_string(i) + "]: expected a positive duration");
       }
     }
   }
@@ -131,9 +128,7 @@ CurveFile ParseCurveJson(const std::string& json_text, const std::string& contex
   return internal::CurveFromJson(internal::ParseJsonText(json_text, context), context);
 }
 
-CurveFile ReadCurveJson(const std::string& path) {
-  return ParseCurveJson(ReadTextFile(path), path);
-}
+CurveFile ReadCurveJson(const std::string& path) { return ParseCurveJson(ReadTextFile(path), path); }
 
 std::string CurveToJson(const PiecewiseCurve& curve, int indent) {
   nlohmann::json pieces = nlohmann::json::array();
@@ -152,9 +147,7 @@ std::string CurveToJson(const PiecewiseCurve& curve, int indent) {
   return j.dump(indent) + "\n";
 }
 
-void WriteCurveJson(const PiecewiseCurve& curve, const std::string& path) {
-  WriteTextFile(path, CurveToJson(curve));
-}
+void WriteCurveJson(const PiecewiseCurve& curve, const std::string& path) { WriteTextFile(path, CurveToJson(curve)); }
 
 // Largest number of waypoints read: 1e6 (a curve through them takes a few hundred MB; a temporal
 // problem on it meets the 2e6-cell cap first at K >= 2).
@@ -173,14 +166,14 @@ Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& sour
     std::string trimmed = line.substr(first);
     if (points.empty() && (trimmed.rfind("x", 0) == 0)) {
       std::string compact;
-      for (char ch : trimmed) if (ch != ' ' && ch != '\t') compact += ch;
+      for (char ch : trimmed)
+        if (ch != ' ' && ch != '\t') compact += ch;
       if (compact == "x,y,z") continue;
     }
     const std::string where = source + " line " + std::to_string(line_number);
     const std::vector<double> values = internal::CsvNumbers(trimmed, where);
     if (values.size() != 3) {
-      throw std::invalid_argument(where + ": expected 3 values x,y,z, got " +
-                                  std::to_string(values.size()));
+      throw std::invalid_argument(where + ": expected 3 values x,y,z, got " + std::to_string(values.size()));
     }
     if (points.size() >= kMaxWaypoints) {
       throw std::invalid_argument(where + ": more than " + std::to_string(kMaxWaypoints) +
@@ -189,16 +182,13 @@ Waypoints ParseWaypointsCsv(const std::string& csv_text, const std::string& sour
     points.emplace_back(values[0], values[1], values[2]);
   }
   if (points.size() < 2) {
-    throw std::invalid_argument(source + ": expected at least 2 waypoints, got " +
-                                std::to_string(points.size()));
+    throw std::invalid_argument(source + ": expected at least 2 waypoints, got " + std::to_string(points.size()));
   }
   Waypoints w(3, static_cast<Eigen::Index>(points.size()));
   for (size_t i = 0; i < points.size(); ++i) w.col(static_cast<Eigen::Index>(i)) = points[i];
   return w;
 }
 
-Waypoints ReadWaypointsCsv(const std::string& path) {
-  return ParseWaypointsCsv(ReadTextFile(path), path);
-}
+Waypoints ReadWaypointsCsv(const std::string& path) { return ParseWaypointsCsv(ReadTextFile(path), path); }
 
 }  // namespace timeopt

@@ -6,8 +6,7 @@
 
 namespace timeopt::internal {
 
-void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& known,
-                       const std::string& where) {
+void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& known, const std::string& where) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     if (!known.count(it.key())) {
       throw std::invalid_argument(where + (where.empty() ? "" : ".") + it.key() + ": unknown key");
@@ -26,8 +25,9 @@ Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field) {
 
 void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits* limits) {
   RequireObject(j, where);
-  RejectUnknownKeys(j, {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk", "max_speed",
-                        "max_acceleration_norm", "max_thrust", "min_thrust", "max_tilt", "gravity"},
+  RejectUnknownKeys(j,
+                    {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk", "max_speed",
+                     "max_acceleration_norm", "max_thrust", "min_thrust", "max_tilt", "gravity"},
                     where);
   constexpr double kNone = std::numeric_limits<double>::infinity();
   const auto per_axis = [&](const char* key, Eigen::Vector3d* field) {
@@ -38,16 +38,20 @@ void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits
   const auto optional = [&](const char* key, std::optional<double>* field) {
     if (!j.contains(key)) return;
     const nlohmann::json& v = j.at(key);
-    if (v.is_null()) field->reset();
-    else *field = FiniteNumber(v, where + "." + key);
+    if (v.is_null())
+      field->reset();
+    else
+      *field = FiniteNumber(v, where + "." + key);
   };
   per_axis("max_velocity", &limits->max_velocity);
   per_axis("max_acceleration", &limits->max_acceleration);
   if (j.contains("max_jerk")) {
     // null: no jerk limit (the paper's profile, whose acceleration steps between cells).
     const nlohmann::json& v = j.at("max_jerk");
-    if (v.is_null()) limits->max_jerk.reset();
-    else limits->max_jerk = PerAxis(v, where + ".max_jerk");
+    if (v.is_null())
+      limits->max_jerk.reset();
+    else
+      limits->max_jerk = PerAxis(v, where + ".max_jerk");
   }
   optional("max_acceleration_change", &limits->max_acceleration_change);
   optional("max_speed", &limits->max_speed);
@@ -55,7 +59,8 @@ void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits
   optional("max_thrust", &limits->max_thrust);
   optional("min_thrust", &limits->min_thrust);
   optional("max_tilt", &limits->max_tilt);
-  if (j.contains("gravity") && !j.at("gravity").is_null()) limits->gravity = FiniteNumber(j.at("gravity"), where + ".gravity");
+  if (j.contains("gravity") && !j.at("gravity").is_null())
+    limits->gravity = FiniteNumber(j.at("gravity"), where + ".gravity");
 }
 
 nlohmann::json LimitsJson(const VehicleLimits& l) {
@@ -66,7 +71,8 @@ nlohmann::json LimitsJson(const VehicleLimits& l) {
   nlohmann::json j;
   j["max_velocity"] = per_axis(l.max_velocity);
   j["max_acceleration"] = per_axis(l.max_acceleration);
-  j["max_jerk"] = l.max_jerk ? nlohmann::json::array({l.max_jerk->x(), l.max_jerk->y(), l.max_jerk->z()}) : nlohmann::json(nullptr);
+  j["max_jerk"] =
+      l.max_jerk ? nlohmann::json::array({l.max_jerk->x(), l.max_jerk->y(), l.max_jerk->z()}) : nlohmann::json(nullptr);
   j["max_acceleration_change"] = optional(l.max_acceleration_change);
   j["max_speed"] = optional(l.max_speed);
   j["max_acceleration_norm"] = optional(l.max_acceleration_norm);
@@ -82,11 +88,10 @@ Eigen::Vector3d Vector3(const nlohmann::json& j, const std::string& field) {
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
-long long IntegerInRange(const nlohmann::json& j, const std::string& field, long long lowest,
-                         long long highest) {
+long long IntegerInRange(const nlohmann::json& j, const std::string& field, long long lowest, long long highest) {
   const auto fail = [&] {
-    return std::invalid_argument(field + ": expected an integer in " + std::to_string(lowest) +
-                                 ".." + std::to_string(highest) + ", got " + j.dump());
+    return std::invalid_argument(field + ": expected an integer in " + std::to_string(lowest) + ".." +
+                                 std::to_string(highest) + ", got " + j.dump());
   };
   if (j.is_number_integer()) {
     // Unsigned values above the signed range are out of range too.

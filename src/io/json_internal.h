@@ -33,13 +33,11 @@ CurveFile CurveFromJson(const nlohmann::json& j, const std::string& context);
 // A finite number at j; throws naming `field` otherwise.
 double FiniteNumber(const nlohmann::json& j, const std::string& field);
 // An array of finite numbers of the given size (any size when expected_size < 0).
-std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field,
-                                int expected_size = -1);
+std::vector<double> FiniteArray(const nlohmann::json& j, const std::string& field, int expected_size = -1);
 
 // Throws "<where>.<key>: unknown key" for a key of the object j that is not in `known` (a typo must
 // not fall back silently to a default). `where` may be empty.
-void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& known,
-                       const std::string& where);
+void RejectUnknownKeys(const nlohmann::json& j, const std::set<std::string>& known, const std::string& where);
 // Throws "<field>: expected an object" unless j is one.
 void RequireObject(const nlohmann::json& j, const std::string& field);
 // A scalar (the same on every axis) or an array of 3 finite numbers.
@@ -57,8 +55,7 @@ nlohmann::json LimitsJson(const VehicleLimits& limits);
 // An array of 3 finite numbers.
 Eigen::Vector3d Vector3(const nlohmann::json& j, const std::string& field);
 // A number with an integer value in [lowest, highest] (30 and 30.0 both read as 30).
-long long IntegerInRange(const nlohmann::json& j, const std::string& field, long long lowest,
-                         long long highest);
+long long IntegerInRange(const nlohmann::json& j, const std::string& field, long long lowest, long long highest);
 
 // The enumerator named by the string at j (FromString of its module); throws naming the field
 // and the allowed names otherwise.

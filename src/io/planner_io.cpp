@@ -29,8 +29,8 @@ struct IntKey {
 };
 
 const std::vector<RealKey<PlannerOptions>> kTopReals = {{"robot_radius", &PlannerOptions::robot_radius},
-                                             {"safety_margin", &PlannerOptions::safety_margin},
-                                             {"max_segment_length", &PlannerOptions::max_segment_length}};
+                                                        {"safety_margin", &PlannerOptions::safety_margin},
+                                                        {"max_segment_length", &PlannerOptions::max_segment_length}};
 const std::vector<IntKey<PlannerOptions>> kTopInts = {{"max_attempts", &PlannerOptions::max_attempts}};
 const std::vector<RealKey<SpatialOptimizerOptions>> kSpatialReals = {
     {"smoothness_weight", &SpatialOptimizerOptions::smoothness_weight},
@@ -63,8 +63,7 @@ void ReadKeys(const json& j, const std::string& where, const std::vector<RealKey
   for (const auto& i : ints) {
     if (j.contains(i.key)) {
       o->*i.field = static_cast<int>(internal::IntegerInRange(
-          j.at(i.key), where + "." + i.key, std::numeric_limits<int>::min(),
-          std::numeric_limits<int>::max()));
+          j.at(i.key), where + "." + i.key, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
     }
   }
 }
@@ -84,8 +83,7 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
                                       const std::string& context) {
   const json root = internal::ParseJsonText(json_text, context);
   internal::RequireObject(root, context);
-  internal::RejectUnknownKeys(root, Keys(kTopReals, kTopInts, {"limits", "temporal", "spatial", "search"}),
-                              context);
+  internal::RejectUnknownKeys(root, Keys(kTopReals, kTopInts, {"limits", "temporal", "spatial", "search"}), context);
   PlannerOptions o = options;
   ReadKeys(root, context, kTopReals, kTopInts, &o);
   if (root.contains("limits")) internal::ReadLimits(root.at("limits"), context + ".limits", &o.limits);
@@ -100,8 +98,7 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
     }
     if (t.contains("rho")) o.rho = internal::FiniteNumber(t.at("rho"), where + ".rho");
     if (t.contains("constraint_mode")) {
-      o.constraint_mode = internal::EnumField(t.at("constraint_mode"), where + ".constraint_mode",
-                                              kConstraintModes);
+      o.constraint_mode = internal::EnumField(t.at("constraint_mode"), where + ".constraint_mode", kConstraintModes);
     }
   }
   if (root.contains("spatial")) {
@@ -114,8 +111,7 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
           internal::EnumField(s.at("parameterization"), where + ".parameterization", kSpatialParameterizations);
     }
     if (s.contains("formulation")) {
-      o.spatial.formulation =
-          internal::EnumField(s.at("formulation"), where + ".formulation", kSpatialFormulations);
+      o.spatial.formulation = internal::EnumField(s.at("formulation"), where + ".formulation", kSpatialFormulations);
     }
     ReadKeys(s, where, kSpatialReals, kSpatialInts, &o.spatial);
   }
@@ -126,8 +122,8 @@ PlannerOptions ParsePlannerConfigJson(const std::string& json_text, const Planne
     internal::RejectUnknownKeys(s, Keys(kSearchReals, kNoSearchInts, {"max_expanded_nodes"}), where);
     ReadKeys(s, where, kSearchReals, kNoSearchInts, &o.search);
     if (s.contains("max_expanded_nodes")) {
-      o.search.max_expanded_nodes = internal::IntegerInRange(
-          s.at("max_expanded_nodes"), where + ".max_expanded_nodes", 1, std::numeric_limits<int64_t>::max());
+      o.search.max_expanded_nodes = internal::IntegerInRange(s.at("max_expanded_nodes"), where + ".max_expanded_nodes",
+                                                             1, std::numeric_limits<int64_t>::max());
     }
   }
   return o;
@@ -146,9 +142,8 @@ std::string PlannerConfigToJson(const PlannerOptions& o, int indent) {
   json root;
   WriteKeys(o, kTopReals, kTopInts, &root);
   root["limits"] = internal::LimitsJson(o.limits);
-  root["temporal"] = {{"K", o.temporal_cells_per_piece},
-                      {"rho", o.rho},
-                      {"constraint_mode", ToString(o.constraint_mode)}};
+  root["temporal"] = {
+      {"K", o.temporal_cells_per_piece}, {"rho", o.rho}, {"constraint_mode", ToString(o.constraint_mode)}};
   json spatial = {{"formulation", ToString(o.spatial.formulation)},
                   {"parameterization", ToString(o.spatial.parameterization)}};
   WriteKeys(o.spatial, kSpatialReals, kSpatialInts, &spatial);

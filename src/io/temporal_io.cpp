@@ -11,10 +11,10 @@
 namespace timeopt {
 namespace {
 
-using nlohmann::json;
 using internal::PerAxis;
 using internal::RejectUnknownKeys;
 using internal::Vector3;
+using nlohmann::json;
 
 const json& Require(const json& j, const std::string& key, const std::string& where) {
   if (!j.contains(key)) throw std::invalid_argument(where + key + ": missing");
@@ -41,12 +41,14 @@ TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std
   if (j.contains("boundary")) {
     const json& b = j.at("boundary");
     if (!b.is_object()) throw std::invalid_argument("boundary: expected an object");
-    RejectUnknownKeys(b, {"start_velocity", "start_acceleration", "end_velocity", "end_acceleration"},
-                      "boundary");
-    if (b.contains("start_velocity")) p.boundary.start_velocity = Vector3(b.at("start_velocity"), "boundary.start_velocity");
-    if (b.contains("start_acceleration")) p.boundary.start_acceleration = Vector3(b.at("start_acceleration"), "boundary.start_acceleration");
+    RejectUnknownKeys(b, {"start_velocity", "start_acceleration", "end_velocity", "end_acceleration"}, "boundary");
+    if (b.contains("start_velocity"))
+      p.boundary.start_velocity = Vector3(b.at("start_velocity"), "boundary.start_velocity");
+    if (b.contains("start_acceleration"))
+      p.boundary.start_acceleration = Vector3(b.at("start_acceleration"), "boundary.start_acceleration");
     if (b.contains("end_velocity")) p.boundary.end_velocity = Vector3(b.at("end_velocity"), "boundary.end_velocity");
-    if (b.contains("end_acceleration")) p.boundary.end_acceleration = Vector3(b.at("end_acceleration"), "boundary.end_acceleration");
+    if (b.contains("end_acceleration"))
+      p.boundary.end_acceleration = Vector3(b.at("end_acceleration"), "boundary.end_acceleration");
   }
 
   if (j.contains("discretization")) {
@@ -110,23 +112,24 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
     j["scp_history"] = r.scp_history;
   }
   if (r.infeasibility) {
-    j["infeasibility"] = {{"cause", r.infeasibility->cause},
-                          {"where", r.infeasibility->where},
-                          {"detail", r.infeasibility->detail}};
+    j["infeasibility"] = {
+        {"cause", r.infeasibility->cause}, {"where", r.infeasibility->where}, {"detail", r.infeasibility->detail}};
   }
   if (r.boundary_relaxation) {
     const TemporalResult::BoundaryRelaxation& b = *r.boundary_relaxation;
-    j["boundary_relaxation"] = {
-        {"start_speed_given", b.start_speed_given}, {"start_speed", b.start_speed},
-        {"start_violation", b.start_speed_given - b.start_speed},
-        {"end_speed_given", b.end_speed_given}, {"end_speed", b.end_speed},
-        {"end_violation", b.end_speed_given - b.end_speed},
-        {"start_scale", b.start_scale}, {"start_acceleration", b.start_acceleration}};
+    j["boundary_relaxation"] = {{"start_speed_given", b.start_speed_given},
+                                {"start_speed", b.start_speed},
+                                {"start_violation", b.start_speed_given - b.start_speed},
+                                {"end_speed_given", b.end_speed_given},
+                                {"end_speed", b.end_speed},
+                                {"end_violation", b.end_speed_given - b.end_speed},
+                                {"start_scale", b.start_scale},
+                                {"start_acceleration", b.start_acceleration}};
   }
   json joints = json::array();
   for (const JointInfo& ji : r.joints) {
-    joints.push_back({{"joint", ji.joint}, {"type", ToString(ji.type)},
-                      {"speed_ratio", ji.speed_ratio}, {"angle", ji.angle}});
+    joints.push_back(
+        {{"joint", ji.joint}, {"type", ToString(ji.type)}, {"speed_ratio", ji.speed_ratio}, {"angle", ji.angle}});
   }
   j["joints"] = joints;
   return j.dump(indent) + "\n";
@@ -138,10 +141,18 @@ std::string SamplesToCsv(const std::vector<TrajectoryState>& samples) {
   char buffer[32];
   for (const TrajectoryState& s : samples) {
     const double values[13] = {s.t,
-                               s.position.x(), s.position.y(), s.position.z(),
-                               s.velocity.x(), s.velocity.y(), s.velocity.z(),
-                               s.acceleration.x(), s.acceleration.y(), s.acceleration.z(),
-                               s.jerk.x(), s.jerk.y(), s.jerk.z()};
+                               s.position.x(),
+                               s.position.y(),
+                               s.position.z(),
+                               s.velocity.x(),
+                               s.velocity.y(),
+                               s.velocity.z(),
+                               s.acceleration.x(),
+                               s.acceleration.y(),
+                               s.acceleration.z(),
+                               s.jerk.x(),
+                               s.jerk.y(),
+                               s.jerk.z()};
     for (int i = 0; i < 13; ++i) {
       std::snprintf(buffer, sizeof(buffer), "%.17g", values[i]);
       out += buffer;
@@ -166,9 +177,12 @@ std::vector<TrajectoryState> ParseSamplesCsv(const std::string& csv_text, const 
     if (compact.empty() || compact[0] == '#') continue;
     const std::string where = source + " line " + std::to_string(line_number);
     if (columns == 0) {
-      if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz") columns = 13;
-      else if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az") columns = 10;
-      else throw std::invalid_argument(where + ": expected the header t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz]");
+      if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz")
+        columns = 13;
+      else if (compact == "t,x,y,z,vx,vy,vz,ax,ay,az")
+        columns = 10;
+      else
+        throw std::invalid_argument(where + ": expected the header t,x,y,z,vx,vy,vz,ax,ay,az[,jx,jy,jz]");
       continue;
     }
     const std::vector<double> values = internal::CsvNumbers(compact, where);

@@ -27,7 +27,8 @@ std::vector<std::vector<double>> Rows(const nlohmann::json& j, const std::string
     throw std::invalid_argument(field + ": expected an array of " + std::to_string(rows) + " arrays (one per piece)");
   }
   std::vector<std::vector<double>> out;
-  for (size_t i = 0; i < rows; ++i) out.push_back(internal::FiniteArray(j[i], field + "[" + std::to_string(i) + "]", columns));
+  for (size_t i = 0; i < rows; ++i)
+    out.push_back(internal::FiniteArray(j[i], field + "[" + std::to_string(i) + "]", columns));
   return out;
 }
 
@@ -83,12 +84,13 @@ Trajectory ParseTrajectoryJson(const std::string& json_text, const std::string& 
     if (!j.contains(key)) throw std::invalid_argument(context + "." + key + ": missing");
   }
   if (!j["format"].is_string() || j["format"].get<std::string>() != kFormatName) {
-    throw std::invalid_argument(context + ".format: expected \"" + std::string(kFormatName) + "\", got " + j["format"].dump());
+    throw std::invalid_argument(context + ".format: expected \"" + std::string(kFormatName) + "\", got " +
+                                j["format"].dump());
   }
   const long long version = internal::IntegerInRange(j["version"], context + ".version", 1, 1000000);
   if (version != kFormatVersion) {
-    throw std::invalid_argument(context + ".version: " + std::to_string(version) + " is not supported (this build reads " +
-                                std::to_string(kFormatVersion) + ")");
+    throw std::invalid_argument(context + ".version: " + std::to_string(version) +
+                                " is not supported (this build reads " + std::to_string(kFormatVersion) + ")");
   }
   if (j.contains("frame") && (!j["frame"].is_string() || j["frame"].get<std::string>() != "ENU")) {
     throw std::invalid_argument(context + ".frame: expected \"ENU\", got " + j["frame"].dump());
@@ -99,7 +101,8 @@ Trajectory ParseTrajectoryJson(const std::string& json_text, const std::string& 
   internal::RequireObject(p, where);
   internal::RejectUnknownKeys(p, {"cells_per_piece", "b", "half_b", "shapes", "cell_edges"}, where);
   if (!p.contains("cells_per_piece")) throw std::invalid_argument(where + ".cells_per_piece: missing");
-  const int K = static_cast<int>(internal::IntegerInRange(p["cells_per_piece"], where + ".cells_per_piece", 1, 100000000));
+  const int K =
+      static_cast<int>(internal::IntegerInRange(p["cells_per_piece"], where + ".cells_per_piece", 1, 100000000));
   const size_t m = static_cast<size_t>(curve.num_pieces());
   TemporalProfile profile;
   try {
@@ -113,7 +116,8 @@ Trajectory ParseTrajectoryJson(const std::string& json_text, const std::string& 
       if (!p.contains("shapes")) throw std::invalid_argument(where + ".shapes: missing");
       auto half = Rows(p["half_b"], where + ".half_b", m, 2 * K + 1);
       const nlohmann::json& s = p["shapes"];
-      if (!s.is_array() || s.size() != m) throw std::invalid_argument(where + ".shapes: expected an array of " + std::to_string(m) + " arrays");
+      if (!s.is_array() || s.size() != m)
+        throw std::invalid_argument(where + ".shapes: expected an array of " + std::to_string(m) + " arrays");
       std::vector<std::vector<CellShape>> shapes(m);
       for (size_t i = 0; i < m; ++i) {
         const std::string row = where + ".shapes[" + std::to_string(i) + "]";
@@ -142,8 +146,9 @@ Trajectory ParseTrajectoryJson(const std::string& json_text, const std::string& 
     const double given = internal::FiniteNumber(j["duration"], context + ".duration");
     if (!(std::abs(given - trajectory.duration()) <= 1e-9 * trajectory.duration())) {
       char buffer[160];
-      std::snprintf(buffer, sizeof(buffer), ".duration: %.17g s, but the profile takes %.17g s (an edited or damaged file?)",
-                    given, trajectory.duration());
+      std::snprintf(buffer, sizeof(buffer),
+                    ".duration: %.17g s, but the profile takes %.17g s (an edited or damaged file?)", given,
+                    trajectory.duration());
       throw std::invalid_argument(context + buffer);
     }
   }
@@ -168,9 +173,21 @@ std::string ExportCsv(const HeadedSamples& samples) {
   out.reserve(out.size() + samples.states.size() * 15 * 24);
   for (size_t i = 0; i < samples.states.size(); ++i) {
     const TrajectoryState& s = samples.states[i];
-    const double values[15] = {s.t, s.position.x(), s.position.y(), s.position.z(), s.velocity.x(), s.velocity.y(),
-                               s.velocity.z(), s.acceleration.x(), s.acceleration.y(), s.acceleration.z(), s.jerk.x(),
-                               s.jerk.y(), s.jerk.z(), samples.yaw.yaw[i], samples.yaw.rate[i]};
+    const double values[15] = {s.t,
+                               s.position.x(),
+                               s.position.y(),
+                               s.position.z(),
+                               s.velocity.x(),
+                               s.velocity.y(),
+                               s.velocity.z(),
+                               s.acceleration.x(),
+                               s.acceleration.y(),
+                               s.acceleration.z(),
+                               s.jerk.x(),
+                               s.jerk.y(),
+                               s.jerk.z(),
+                               samples.yaw.yaw[i],
+                               samples.yaw.rate[i]};
     for (int c = 0; c < 15; ++c) AppendNumber(&out, values[c], c == 14 ? '\n' : ',');
   }
   return out;
@@ -185,9 +202,12 @@ std::string ExportPx4Csv(const HeadedSamples& samples) {
     std::snprintf(buffer, sizeof(buffer), "%lld,", static_cast<long long>(std::llround(s.t * 1e6)));
     out += buffer;
     // NED from ENU: north = y, east = x, down = -z; yaw from north, clockwise.
-    const double values[11] = {s.position.y(), s.position.x(), -s.position.z(), s.velocity.y(), s.velocity.x(),
-                               -s.velocity.z(), s.acceleration.y(), s.acceleration.x(), -s.acceleration.z(),
-                               kPi / 2.0 - samples.yaw.yaw[i], 0.0 - samples.yaw.rate[i]};  // (0 - 0 is +0, not -0)
+    const double values[11] = {s.position.y(),           s.position.x(),
+                               -s.position.z(),          s.velocity.y(),
+                               s.velocity.x(),           -s.velocity.z(),
+                               s.acceleration.y(),       s.acceleration.x(),
+                               -s.acceleration.z(),      kPi / 2.0 - samples.yaw.yaw[i],
+                               0.0 - samples.yaw.rate[i]};  // (0 - 0 is +0, not -0)
     for (int c = 0; c < 11; ++c) AppendNumber(&out, values[c], c == 10 ? '\n' : ',');
   }
   return out;
@@ -237,10 +257,14 @@ std::string ExportPolynomialJson(const Trajectory& trajectory, const PolynomialF
 
 const char* ToString(ExportFormat format) {
   switch (format) {
-    case ExportFormat::kCsv: return "csv";
-    case ExportFormat::kPolynomial: return "polynomial";
-    case ExportFormat::kPx4: return "px4";
-    case ExportFormat::kRosbag: return "rosbag";
+    case ExportFormat::kCsv:
+      return "csv";
+    case ExportFormat::kPolynomial:
+      return "polynomial";
+    case ExportFormat::kPx4:
+      return "px4";
+    case ExportFormat::kRosbag:
+      return "rosbag";
   }
   return "unknown";
 }
@@ -250,7 +274,8 @@ bool FromString(const std::string& text, ExportFormat* format) { return EnumFrom
 void WriteExport(const Trajectory& trajectory, ExportFormat format, const std::string& path,
                  const ExportOptions& options) {
   if (options.map != nullptr && format != ExportFormat::kRosbag) {
-    throw std::invalid_argument(std::string("export: only the rosbag format draws a map (format ") + ToString(format) + ")");
+    throw std::invalid_argument(std::string("export: only the rosbag format draws a map (format ") + ToString(format) +
+                                ")");
   }
   if (format == ExportFormat::kPolynomial) {
     WriteTextFile(path, ExportPolynomialJson(trajectory, options.fit, options.yaw));
@@ -276,7 +301,8 @@ std::string RosbagContentJson(const HeadedSamples& samples, const OccupancyMap* 
   for (size_t i = 0; i < samples.states.size(); ++i) {
     const TrajectoryState& s = samples.states[i];
     rows.push_back({s.t, s.position.x(), s.position.y(), s.position.z(), s.velocity.x(), s.velocity.y(), s.velocity.z(),
-                    s.acceleration.x(), s.acceleration.y(), s.acceleration.z(), samples.yaw.yaw[i], samples.yaw.rate[i]});
+                    s.acceleration.x(), s.acceleration.y(), s.acceleration.z(), samples.yaw.yaw[i],
+                    samples.yaw.rate[i]});
     fastest = std::max(fastest, s.velocity.norm());
   }
   j["columns"] = {"t", "x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "yaw", "yaw_rate"};
@@ -318,7 +344,8 @@ void WriteRosbag(const std::string& content, const std::string& bag_path) {
     }
     tried += (tried.empty() ? "" : ", ") + path.string();
   }
-  if (script.empty()) throw FileError("rosbag: the bag writer timeopt_rosbag.py was not found (looked in " + tried + ")");
+  if (script.empty())
+    throw FileError("rosbag: the bag writer timeopt_rosbag.py was not found (looked in " + tried + ")");
   const char* python = "/usr/bin/python3";
   if (access(python, X_OK) != 0) {
     throw FileError("rosbag: the bag is written by Debian's python3 with python3-rosbag; /usr/bin/python3 is missing");
@@ -365,8 +392,10 @@ void WriteRosbag(const std::string& content, const std::string& bag_path) {
   cleanup();
   while (!said.empty() && (said.back() == '\n' || said.back() == '\r')) said.pop_back();
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    const std::string last_line = said.substr(said.find_last_of('\n') == std::string::npos ? 0 : said.find_last_of('\n') + 1);
-    throw FileError("rosbag: " + (last_line.empty() ? std::string("the writer failed (") + script.string() + ")" : last_line));
+    const std::string last_line =
+        said.substr(said.find_last_of('\n') == std::string::npos ? 0 : said.find_last_of('\n') + 1);
+    throw FileError("rosbag: " +
+                    (last_line.empty() ? std::string("the writer failed (") + script.string() + ")" : last_line));
   }
 }
 

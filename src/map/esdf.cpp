@@ -25,7 +25,7 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 void* AllocateLarge(std::size_t bytes) {
   if (bytes < kHugePage) return ::operator new(bytes);
   const std::size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-  void* pointer = ::operator new(rounded, std::align_val_t{kHugePage});
+  void* pointer = ::operator new (rounded, std::align_val_t{kHugePage});
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   madvise(pointer, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
 #endif
@@ -36,7 +36,7 @@ void DeallocateLarge(void* pointer, std::size_t bytes) noexcept {
   if (bytes < kHugePage) {
     ::operator delete(pointer);
   } else {
-    ::operator delete(pointer, std::align_val_t{kHugePage});
+    ::operator delete (pointer, std::align_val_t{kHugePage});
   }
 }
 
@@ -54,8 +54,7 @@ constexpr SquaredCells kFar = SquaredCells{1} << 30;
 // Workspace of the 1-D lower-envelope transform (Felzenszwalb-Huttenlocher), sized for the
 // longest axis.
 struct EnvelopeWorkspace {
-  explicit EnvelopeWorkspace(int n)
-      : input(static_cast<size_t>(n)), envelope(static_cast<size_t>(n)) {}
+  explicit EnvelopeWorkspace(int n) : input(static_cast<size_t>(n)), envelope(static_cast<size_t>(n)) {}
   struct Parabola {
     int64_t height;     // F(apex) = f[apex] + apex^2
     int64_t start_num;  // F(apex) - F(previous apex)
@@ -68,8 +67,8 @@ struct EnvelopeWorkspace {
 
 // Lower envelope on the sub-line [lo, hi] of the input, written to output[q] for q in
 // [first, last) (a sub-range of [lo, hi]).
-void EnvelopeRange(int lo, int hi, int first, int last, EnvelopeWorkspace* ws,
-                   SquaredCells* output, int64_t output_stride) {
+void EnvelopeRange(int lo, int hi, int first, int last, EnvelopeWorkspace* ws, SquaredCells* output,
+                   int64_t output_stride) {
   const SquaredCells* f = ws->input.data();
   // Parabola p: (q - p)^2 + f[p]. Parabolas a > b cross at s(a, b) = (F(a) - F(b)) / (2 (a - b))
   // with F(p) = f[p] + p^2. Envelope entry k keeps the numerator F(v_k) - F(v_{k-1}) and the
@@ -145,8 +144,7 @@ void LowerEnvelope(int n, EnvelopeWorkspace* ws, SquaredCells* output, int64_t o
 // occupancy equals `site_value`, into `out` (row-major, x fastest). The order of the axes
 // follows the memory: z first (binary input, sweeps over whole planes), then y inside each
 // plane (which fits in cache), then x along contiguous rows of the same plane.
-void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value,
-                              SquaredCells* out) {
+void SquaredDistanceTransform(const OccupancyGrid& grid, uint8_t site_value, SquaredCells* out) {
   const int nx = grid.box.size.x();
   const int ny = grid.box.size.y();
   const int nz = grid.box.size.z();
@@ -225,8 +223,7 @@ Esdf::Esdf(const OccupancyGrid& grid) {
   first_centre_ = grid.Centre(box_.min);
   last_centre_ = grid.Centre(box_.end() - Eigen::Vector3i::Ones());
   max_cell_ = (n.array() - 2).cwiseMax(0);
-  step_ << (n.x() > 1 ? 1 : 0), (n.y() > 1 ? n.x() : 0),
-      (n.z() > 1 ? static_cast<int64_t>(n.x()) * n.y() : 0);
+  step_ << (n.x() > 1 ? 1 : 0), (n.y() > 1 ? n.x() : 0), (n.z() > 1 ? static_cast<int64_t>(n.x()) * n.y() : 0);
 
   const size_t count = static_cast<size_t>(grid.box.num_voxels());
   values_.resize(count);
@@ -253,10 +250,11 @@ Esdf::Esdf(const OccupancyGrid& grid) {
   values = SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res - half;
   // Occupied voxels: minus (distance to the nearest free centre minus half a voxel).
   SquaredDistanceTransform(grid, 0, squared.get());
-  const Eigen::Map<const Eigen::Array<uint8_t, Eigen::Dynamic, 1>> is_occupied(
-      grid.occupied.data(), size);
-  values = (is_occupied != uint8_t{0})
-               .select(half - SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res, values);
+  const Eigen::Map<const Eigen::Array<uint8_t, Eigen::Dynamic, 1>> is_occupied(grid.occupied.data(), size);
+  values =
+      (is_occupied != uint8_t{0})
+          .select(half - SquaredArray(reinterpret_cast<const int32_t*>(squared.get()), size).cast<float>().sqrt() * res,
+                  values);
 }
 
 namespace {
@@ -268,10 +266,10 @@ void CheckBudget(const VoxelBox& voxels, int64_t max_bytes) {
   if (max_bytes <= 0 || Esdf::PeakBytes(voxels) <= max_bytes || voxels.num_voxels() > kMaxGridVoxels) return;
   std::ostringstream message;
   constexpr double kMiB = 1024.0 * 1024.0;
-  message << std::fixed << std::setprecision(2) << "the distance field over " << voxels.size(0) << " x " << voxels.size(1) << " x "
-          << voxels.size(2) << " voxels needs " << static_cast<double>(Esdf::PeakBytes(voxels)) / kMiB
-          << " MiB at its peak, above the memory budget of " << static_cast<double>(max_bytes) / kMiB
-          << " MiB (a smaller region, a coarser map, or a larger budget)";
+  message << std::fixed << std::setprecision(2) << "the distance field over " << voxels.size(0) << " x "
+          << voxels.size(1) << " x " << voxels.size(2) << " voxels needs "
+          << static_cast<double>(Esdf::PeakBytes(voxels)) / kMiB << " MiB at its peak, above the memory budget of "
+          << static_cast<double>(max_bytes) / kMiB << " MiB (a smaller region, a coarser map, or a larger budget)";
   throw std::invalid_argument(message.str());
 }
 
@@ -325,8 +323,8 @@ Esdf Esdf::FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& reg
   const auto no_overlap = [&] {
     std::ostringstream message;
     message << "the region [" << region.min().transpose() << "] - [" << region.max().transpose()
-            << "] m does not overlap the map's known box " << "[" << known_metric.min().transpose() << "] - ["
-            << known_metric.max().transpose() << "] m";
+            << "] m does not overlap the map's known box "
+            << "[" << known_metric.min().transpose() << "] - [" << known_metric.max().transpose() << "] m";
     return std::invalid_argument(message.str());
   };
   if (clipped.isEmpty()) throw no_overlap();
@@ -365,9 +363,8 @@ inline double Esdf::Evaluate(const Eigen::Vector3d& point, Eigen::Vector3d* grad
   const int iz = std::min(static_cast<int>(uz), max_cell_.z());
   const double tx = ux - ix, ty = uy - iy, tz = uz - iz;
   const int64_t sx = step_.x(), sy = step_.y(), sz = step_.z();
-  const float* v = values_.data() + ix +
-                   static_cast<int64_t>(box_.size.x()) *
-                       (iy + static_cast<int64_t>(box_.size.y()) * iz);
+  const float* v =
+      values_.data() + ix + static_cast<int64_t>(box_.size.x()) * (iy + static_cast<int64_t>(box_.size.y()) * iz);
   const double d000 = v[0], d100 = v[sx], d010 = v[sy], d110 = v[sx + sy];
   const double d001 = v[sz], d101 = v[sx + sz], d011 = v[sy + sz], d111 = v[sx + sy + sz];
   const double e00 = d100 - d000, e10 = d110 - d010, e01 = d101 - d001, e11 = d111 - d011;
@@ -382,8 +379,7 @@ inline double Esdf::Evaluate(const Eigen::Vector3d& point, Eigen::Vector3d* grad
   const double outside = outside_sq != 0.0 ? std::sqrt(outside_sq) : 0.0;
   distance += outside;
   if constexpr (kWithGradient) {
-    const double gx = ((1.0 - tz) * (e00 + ty * (e10 - e00)) + tz * (e01 + ty * (e11 - e01))) *
-                      inverse_resolution_;
+    const double gx = ((1.0 - tz) * (e00 + ty * (e10 - e00)) + tz * (e01 + ty * (e11 - e01))) * inverse_resolution_;
     const double gy = ((1.0 - tz) * (c10 - c00) + tz * (c11 - c01)) * inverse_resolution_;
     const double gz = (c1 - c0) * inverse_resolution_;
     // Along an axis where the point was clamped, the interpolant no longer depends on it.
@@ -401,8 +397,7 @@ double Esdf::DistanceAndGradient(const Eigen::Vector3d& point, Eigen::Vector3d* 
   return Evaluate<true>(point, gradient);
 }
 
-void Esdf::Distances(const Eigen::Matrix3Xd& points, Eigen::VectorXd* distances,
-                     Eigen::Matrix3Xd* gradients) const {
+void Esdf::Distances(const Eigen::Matrix3Xd& points, Eigen::VectorXd* distances, Eigen::Matrix3Xd* gradients) const {
   if (distances == nullptr) throw std::invalid_argument("Distances: distances is null");
   const Eigen::Index n = points.cols();
   distances->resize(n);
@@ -425,14 +420,12 @@ double Esdf::VoxelDistance(const Eigen::Vector3i& index) const {
     throw std::invalid_argument(message.str());
   }
   const Eigen::Vector3i local = index - box_.min;
-  return values_[static_cast<size_t>(
-      local.x() + static_cast<int64_t>(box_.size.x()) *
-                      (local.y() + static_cast<int64_t>(box_.size.y()) * local.z()))];
+  return values_[static_cast<size_t>(local.x() + static_cast<int64_t>(box_.size.x()) *
+                                                     (local.y() + static_cast<int64_t>(box_.size.y()) * local.z()))];
 }
 
 bool Esdf::Contains(const Eigen::Vector3d& point) const {
-  return (point.array() >= first_centre_.array()).all() &&
-         (point.array() <= last_centre_.array()).all();
+  return (point.array() >= first_centre_.array()).all() && (point.array() <= last_centre_.array()).all();
 }
 
 Eigen::AlignedBox3d Esdf::domain() const { return Eigen::AlignedBox3d(first_centre_, last_centre_); }

@@ -16,8 +16,7 @@ void Require(bool condition, const std::string& message) {
 void ValidateBoundsAndResolution(const Eigen::AlignedBox3d& bounds, double resolution) {
   Require(std::isfinite(resolution) && resolution > 0.0, "resolution must be positive");
   Require(bounds.min().allFinite() && bounds.max().allFinite(), "bounds must be finite");
-  Require((bounds.max().array() > bounds.min().array()).all(),
-          "bounds must have max > min on every axis");
+  Require((bounds.max().array() > bounds.min().array()).all(), "bounds must have max > min on every axis");
 }
 
 constexpr double kPi = 3.14159265358979323846;
@@ -52,8 +51,7 @@ void ForestOptions::Validate() const {
   ValidateBoundsAndResolution(bounds, resolution);
   Require(std::isfinite(density) && density >= 0.0, "forest density must be >= 0 (trees per m^2)");
   Require(std::isfinite(min_radius) && min_radius > 0.0, "forest min_radius must be positive");
-  Require(std::isfinite(max_radius) && max_radius >= min_radius,
-          "forest max_radius must be >= min_radius");
+  Require(std::isfinite(max_radius) && max_radius >= min_radius, "forest max_radius must be >= min_radius");
   // Each tree costs a pass over its voxel columns: a cap keeps absurd densities from running for
   // hours (1e6 trees: minutes at most; a 10 x 10 m forest at 1 tree/m^2 has 100).
   const Eigen::Vector3d size = bounds.sizes();
@@ -68,8 +66,7 @@ void SharpTurnOptions::Validate() const {
   Require(std::isfinite(leg_length) && leg_length > 0.0, "sharp-turn leg_length must be positive");
   Require(std::isfinite(turn_angle_deg) && turn_angle_deg > 0.0 && turn_angle_deg <= 180.0,
           "sharp-turn turn_angle_deg must be in (0, 180]");
-  Require(std::isfinite(height) && height >= resolution,
-          "sharp-turn height must be at least one voxel");
+  Require(std::isfinite(height) && height >= resolution, "sharp-turn height must be at least one voxel");
   Require(std::isfinite(wall) && wall >= resolution, "sharp-turn wall must be at least one voxel");
 }
 
@@ -90,8 +87,7 @@ Eigen::AlignedBox3d SharpTurnOptions::Bounds() const {
   const Eigen::Matrix<double, 2, 3> points = Polyline();
   const double margin = 0.5 * corridor_width + wall;
   const Eigen::Vector2d hi = points.rowwise().maxCoeff().array() + margin;
-  return Eigen::AlignedBox3d(Eigen::Vector3d::Zero(),
-                             Eigen::Vector3d(hi.x(), hi.y(), height + 2.0 * wall));
+  return Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d(hi.x(), hi.y(), height + 2.0 * wall));
 }
 
 void RandomBoxesOptions::Validate() const {
@@ -148,8 +144,8 @@ OccupancyGrid GenerateSharpTurn(const SharpTurnOptions& options) {
   ForEachVoxel(grid, [&](const Eigen::Vector3i& index, const Eigen::Vector3d& centre) {
     if (centre.z() < floor || centre.z() > ceiling) return;
     const Eigen::Vector2d p = centre.head<2>();
-    const double distance = std::min(SegmentDistance(p, line.col(0), line.col(1)),
-                                     SegmentDistance(p, line.col(1), line.col(2)));
+    const double distance =
+        std::min(SegmentDistance(p, line.col(0), line.col(1)), SegmentDistance(p, line.col(1), line.col(2)));
     if (distance <= half_width) grid.Set(index, false);
   });
   return grid;

@@ -81,8 +81,8 @@ FileHeader ParseHeader(const std::string& content, const std::string& path) {
   } else if (line == kFullFirstLine) {
     header.binary = false;
   } else {
-    throw std::invalid_argument("'" + path + "' is not an OctoMap file (first line is not '" +
-                                kBinaryFirstLine + "' or '" + kFullFirstLine + "')");
+    throw std::invalid_argument("'" + path + "' is not an OctoMap file (first line is not '" + kBinaryFirstLine +
+                                "' or '" + kFullFirstLine + "')");
   }
   bool have_data = false;
   while (next_line(&line)) {
@@ -221,8 +221,10 @@ Eigen::Vector3i IndexFromKey(const octomap::OcTreeKey& key) {
 
 const char* ToString(UnknownSpace unknown) {
   switch (unknown) {
-    case UnknownSpace::kFree: return "free";
-    case UnknownSpace::kOccupied: return "occupied";
+    case UnknownSpace::kFree:
+      return "free";
+    case UnknownSpace::kOccupied:
+      return "occupied";
   }
   return "unknown";
 }
@@ -246,8 +248,7 @@ OccupancyMap::OccupancyMap(double resolution, UnknownSpace unknown) : unknown_(u
   impl_ = std::make_unique<Impl>(resolution);
 }
 
-OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl, UnknownSpace unknown,
-                           std::string source_type)
+OccupancyMap::OccupancyMap(std::unique_ptr<Impl> impl, UnknownSpace unknown, std::string source_type)
     : impl_(std::move(impl)), unknown_(unknown), source_type_(std::move(source_type)) {}
 
 OccupancyMap::~OccupancyMap() = default;
@@ -255,9 +256,7 @@ OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
 OccupancyMap::OccupancyMap(const OccupancyMap& other)
-    : impl_(std::make_unique<Impl>(*other.impl_)),
-      unknown_(other.unknown_),
-      source_type_(other.source_type_) {}
+    : impl_(std::make_unique<Impl>(*other.impl_)), unknown_(other.unknown_), source_type_(other.source_type_) {}
 
 OccupancyMap& OccupancyMap::operator=(const OccupancyMap& other) {
   if (this != &other) *this = OccupancyMap(other);
@@ -348,8 +347,7 @@ OccupancyMap OccupancyMap::FromGrid(const OccupancyGrid& grid, UnknownSpace unkn
       const Eigen::Vector3i local = c - lo;
       if ((local.array() < 0).any() || (local.array() >= size.array()).any()) return kUnknown;
       return state[static_cast<size_t>(local.x() + static_cast<int64_t>(size.x()) *
-                                                       (local.y() + static_cast<int64_t>(size.y()) *
-                                                                        local.z()))];
+                                                       (local.y() + static_cast<int64_t>(size.y()) * local.z()))];
     }
   };
   std::vector<Level> levels(kTreeDepth + 1);
@@ -364,9 +362,8 @@ OccupancyMap OccupancyMap::FromGrid(const OccupancyGrid& grid, UnknownSpace unkn
     Level& level = levels[k];
     level.lo = Eigen::Vector3i(below.lo.x() >> 1, below.lo.y() >> 1, below.lo.z() >> 1);
     const Eigen::Vector3i below_last = below.lo + below.size - Eigen::Vector3i::Ones();
-    level.size =
-        Eigen::Vector3i(below_last.x() >> 1, below_last.y() >> 1, below_last.z() >> 1) - level.lo +
-        Eigen::Vector3i::Ones();
+    level.size = Eigen::Vector3i(below_last.x() >> 1, below_last.y() >> 1, below_last.z() >> 1) - level.lo +
+                 Eigen::Vector3i::Ones();
     level.state.resize(static_cast<size_t>(level.size.prod()));
     size_t i = 0;
     for (int z = 0; z < level.size.z(); ++z) {
@@ -486,9 +483,7 @@ double OccupancyMap::FreeVolume() const {
   return volume;
 }
 
-int64_t OccupancyMap::NumLeaves() const {
-  return static_cast<int64_t>(impl_->tree.getNumLeafNodes());
-}
+int64_t OccupancyMap::NumLeaves() const { return static_cast<int64_t>(impl_->tree.getNumLeafNodes()); }
 
 int64_t OccupancyMap::NumNodes() const { return static_cast<int64_t>(impl_->tree.size()); }
 
@@ -509,8 +504,7 @@ OccupancyGrid OccupancyMap::Rasterize(const VoxelBox& box) const {
                                    static_cast<octomap::key_type>(hi_key.y()),
                                    static_cast<octomap::key_type>(hi_key.z()));
   const Eigen::Vector3i box_end = box.end();
-  for (auto it = tree.begin_leafs_bbx(min_key, max_key), end = tree.end_leafs_bbx(); it != end;
-       ++it) {
+  for (auto it = tree.begin_leafs_bbx(min_key, max_key), end = tree.end_leafs_bbx(); it != end; ++it) {
     const uint8_t value = tree.isNodeOccupied(*it) ? 1 : 0;
     const Eigen::Vector3i corner = IndexFromKey(it.getIndexKey());
     const int size = 1 << (kTreeDepth - static_cast<int>(it.getDepth()));

@@ -36,8 +36,8 @@ VoxelBox VoxelBox::Covering(const Eigen::AlignedBox3d& box, double resolution) {
   }
   if ((box.max().array() <= box.min().array()).any()) {
     std::ostringstream message;
-    message << "box has zero or negative size: min (" << box.min().transpose() << "), max ("
-            << box.max().transpose() << "); every axis needs max > min";
+    message << "box has zero or negative size: min (" << box.min().transpose() << "), max (" << box.max().transpose()
+            << "); every axis needs max > min";
     throw std::invalid_argument(message.str());
   }
   // A corner within kSnap voxels of a lattice plane counts as on it, so that e.g. 0.3 / 0.1
@@ -62,8 +62,8 @@ OccupancyGrid::OccupancyGrid(double resolution_in, const VoxelBox& box_in, bool 
   if (box.empty()) throw std::invalid_argument("grid box is empty (a size is not positive)");
   if (box.num_voxels() > kMaxGridVoxels) {
     std::ostringstream message;
-    message << "grid of " << box.size.x() << " x " << box.size.y() << " x " << box.size.z() << " = "
-            << box.num_voxels() << " voxels is above the " << kMaxGridVoxels
+    message << "grid of " << box.size.x() << " x " << box.size.y() << " x " << box.size.z() << " = " << box.num_voxels()
+            << " voxels is above the " << kMaxGridVoxels
             << " supported (~5 bytes each with its distance field); use a smaller region or a coarser "
                "resolution";
     throw std::invalid_argument(message.str());

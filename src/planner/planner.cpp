@@ -58,14 +58,22 @@ double MillisecondsSince(Clock::time_point t) {
 
 PlanStatus FromSearch(PathSearchStatus status) {
   switch (status) {
-    case PathSearchStatus::kSuccess: return PlanStatus::kSuccess;
-    case PathSearchStatus::kInvalidInput: return PlanStatus::kInvalidInput;
-    case PathSearchStatus::kStartOutsideMap: return PlanStatus::kStartOutsideMap;
-    case PathSearchStatus::kGoalOutsideMap: return PlanStatus::kGoalOutsideMap;
-    case PathSearchStatus::kStartInCollision: return PlanStatus::kStartInCollision;
-    case PathSearchStatus::kGoalInCollision: return PlanStatus::kGoalInCollision;
-    case PathSearchStatus::kUnreachable: return PlanStatus::kUnreachable;
-    case PathSearchStatus::kNodeLimit: return PlanStatus::kSearchLimit;
+    case PathSearchStatus::kSuccess:
+      return PlanStatus::kSuccess;
+    case PathSearchStatus::kInvalidInput:
+      return PlanStatus::kInvalidInput;
+    case PathSearchStatus::kStartOutsideMap:
+      return PlanStatus::kStartOutsideMap;
+    case PathSearchStatus::kGoalOutsideMap:
+      return PlanStatus::kGoalOutsideMap;
+    case PathSearchStatus::kStartInCollision:
+      return PlanStatus::kStartInCollision;
+    case PathSearchStatus::kGoalInCollision:
+      return PlanStatus::kGoalInCollision;
+    case PathSearchStatus::kUnreachable:
+      return PlanStatus::kUnreachable;
+    case PathSearchStatus::kNodeLimit:
+      return PlanStatus::kSearchLimit;
   }
   return PlanStatus::kInvalidInput;
 }
@@ -74,25 +82,35 @@ PlanStatus FromSearch(PathSearchStatus status) {
 
 const char* ToString(PlanStatus status) {
   switch (status) {
-    case PlanStatus::kSuccess: return "success";
-    case PlanStatus::kInvalidInput: return "invalid_input";
-    case PlanStatus::kStartOutsideMap: return "start_outside_map";
-    case PlanStatus::kGoalOutsideMap: return "goal_outside_map";
-    case PlanStatus::kStartInCollision: return "start_in_collision";
-    case PlanStatus::kGoalInCollision: return "goal_in_collision";
-    case PlanStatus::kUnreachable: return "unreachable";
-    case PlanStatus::kSearchLimit: return "search_limit";
-    case PlanStatus::kCollision: return "collision";
-    case PlanStatus::kSpatialFailure: return "spatial_failure";
-    case PlanStatus::kTemporalInfeasible: return "temporal_infeasible";
-    case PlanStatus::kTemporalFailure: return "temporal_failure";
+    case PlanStatus::kSuccess:
+      return "success";
+    case PlanStatus::kInvalidInput:
+      return "invalid_input";
+    case PlanStatus::kStartOutsideMap:
+      return "start_outside_map";
+    case PlanStatus::kGoalOutsideMap:
+      return "goal_outside_map";
+    case PlanStatus::kStartInCollision:
+      return "start_in_collision";
+    case PlanStatus::kGoalInCollision:
+      return "goal_in_collision";
+    case PlanStatus::kUnreachable:
+      return "unreachable";
+    case PlanStatus::kSearchLimit:
+      return "search_limit";
+    case PlanStatus::kCollision:
+      return "collision";
+    case PlanStatus::kSpatialFailure:
+      return "spatial_failure";
+    case PlanStatus::kTemporalInfeasible:
+      return "temporal_infeasible";
+    case PlanStatus::kTemporalFailure:
+      return "temporal_failure";
   }
   return "unknown";
 }
 
-bool FromString(const std::string& text, PlanStatus* status) {
-  return EnumFromString(text, kPlanStatuses, status);
-}
+bool FromString(const std::string& text, PlanStatus* status) { return EnumFromString(text, kPlanStatuses, status); }
 
 bool PlannerOptions::IsValid(std::string* error) const {
   const auto fail = [error](const std::string& field, const std::string& expected, double got) {
@@ -132,12 +150,11 @@ bool PlannerOptions::IsValid(std::string* error) const {
   if (!std::isfinite(rho) || rho < 0.0) return fail("rho", "a finite number >= 0", rho);
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(limits.max_velocity(a)) || limits.max_velocity(a) <= 0.0) {
-      return fail("limits.max_velocity[" + std::to_string(a) + "]", "a positive number (m/s)",
-                  limits.max_velocity(a));
+      return fail("limits.max_velocity[" + std::to_string(a) + "]", "a positive number (m/s)", limits.max_velocity(a));
     }
     if (!std::isfinite(limits.max_acceleration(a)) || limits.max_acceleration(a) <= 0.0) {
-      return fail("limits.max_acceleration[" + std::to_string(a) + "]",
-                  "a positive number (m/s^2)", limits.max_acceleration(a));
+      return fail("limits.max_acceleration[" + std::to_string(a) + "]", "a positive number (m/s^2)",
+                  limits.max_acceleration(a));
     }
   }
   if (limits.max_acceleration_change.has_value() &&
@@ -190,13 +207,9 @@ void SamplePiece(const PolynomialPiece& piece, double step, Eigen::Matrix3Xd* po
 double VoxelClearance(const Esdf& esdf, const Eigen::Vector3d& point, double reach) {
   const double r = esdf.resolution();
   const VoxelBox& box = esdf.box();
-  const Eigen::Vector3i lo =
-      ((point.array() - reach) / r).floor().cast<int>().max(box.min.array()).matrix();
-  const Eigen::Vector3i hi = ((point.array() + reach) / r)
-                                 .floor()
-                                 .cast<int>()
-                                 .min((box.end() - Eigen::Vector3i::Ones()).array())
-                                 .matrix();
+  const Eigen::Vector3i lo = ((point.array() - reach) / r).floor().cast<int>().max(box.min.array()).matrix();
+  const Eigen::Vector3i hi =
+      ((point.array() + reach) / r).floor().cast<int>().min((box.end() - Eigen::Vector3i::Ones()).array()).matrix();
   double best = reach;
   for (int z = lo.z(); z <= hi.z(); ++z) {
     for (int y = lo.y(); y <= hi.y(); ++y) {
@@ -204,8 +217,7 @@ double VoxelClearance(const Esdf& esdf, const Eigen::Vector3d& point, double rea
         const Eigen::Vector3i index(x, y, z);
         if (esdf.VoxelDistance(index) >= 0.0) continue;  // free voxel
         const Eigen::Vector3d corner = index.cast<double>() * r;
-        const Eigen::Vector3d nearest =
-            point.cwiseMax(corner).cwiseMin(corner + Eigen::Vector3d::Constant(r));
+        const Eigen::Vector3d nearest = point.cwiseMax(corner).cwiseMin(corner + Eigen::Vector3d::Constant(r));
         best = std::min(best, (point - nearest).norm());
       }
     }
@@ -225,8 +237,7 @@ double MinClearance(const DistanceField& field, const PiecewiseCurve& curve, dou
   return smallest;
 }
 
-double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double step,
-                         double exact_below) {
+double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double step, double exact_below) {
   double smallest = std::numeric_limits<double>::infinity();
   Eigen::Matrix3Xd points;
   Eigen::VectorXd distances;
@@ -241,7 +252,6 @@ double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double s
   }
   return smallest;
 }
-
 
 Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
   std::vector<Eigen::Vector3d> out;
@@ -258,8 +268,7 @@ Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
 
 Planner::Planner(const Esdf& esdf) : esdf_(&esdf), search_(esdf) {}
 
-PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
-                         const PlannerOptions& options) {
+PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, const PlannerOptions& options) {
   const auto started = Clock::now();
   PlanResult result;
   auto finish = [&](PlanStatus status, std::string message) {
@@ -318,8 +327,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   };
   const Eigen::Vector3d start_velocity =
       onto_limits(options.start_velocity, options.limits.max_velocity, options.limits.max_speed);
-  const Eigen::Vector3d start_acceleration = onto_limits(
-      options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
+  const Eigen::Vector3d start_acceleration =
+      onto_limits(options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
   // tau: the first piece (after splitting) at the start speed, so that f' matches the piece's chord.
   const auto hold_start = [&](const Waypoints& joints, SpatialOptimizerOptions* attempt_options) {
     if (!moving) return;
@@ -336,9 +345,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   const double exact_below = options.robot_radius + options.clearance_check_margin;
   const double half_step = 0.5 * options.clearance_check_step;
   const double required = std::max(
-      options.robot_radius,
-      std::min({options.robot_radius + half_step, VoxelClearance(*esdf_, start, exact_below),
-                VoxelClearance(*esdf_, goal, exact_below)}));
+      options.robot_radius, std::min({options.robot_radius + half_step, VoxelClearance(*esdf_, start, exact_below),
+                                      VoxelClearance(*esdf_, goal, exact_below)}));
   {
     // The pieces of the last attempt (the shortest segments), counted before any is made: a
     // max_segment_length of 1e-9 m asked for 3e10 of them (3.2 GB before the allocation failed).
@@ -360,8 +368,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     const double factor = std::pow(options.retry_collision_weight_factor, attempt);
     SpatialOptimizerOptions attempt_options = spatial;
     attempt_options.collision_weight = std::min(kMaxSpatialWeight, spatial.collision_weight * factor);
-    const Waypoints joints =
-        SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
+    const Waypoints joints = SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
     hold_start(joints, &attempt_options);
     t = Clock::now();
     result.spatial = OptimizeSpatialCurve(*esdf_, joints, attempt_options);
@@ -371,9 +378,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
            "attempt " + std::to_string(attempt + 1) + ", " + std::to_string(joints.cols() - 1) + " pieces, " +
                std::to_string(result.spatial.iterations.size()) + " iterations, " + ToString(result.spatial.status));
     if (!result.spatial.is_usable()) {
-      return finish(PlanStatus::kSpatialFailure,
-                    std::string("spatial optimization: ") + ToString(result.spatial.status) + ": " +
-                        result.spatial.message);
+      return finish(PlanStatus::kSpatialFailure, std::string("spatial optimization: ") +
+                                                     ToString(result.spatial.status) + ": " + result.spatial.message);
     }
     result.curve = result.spatial.curve;
     // A piece longer than twice the field's diagonal has run away (it cannot stay in the field),
@@ -390,16 +396,15 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
       }
     }
     t = Clock::now();
-    result.min_clearance =
-        MinVoxelClearance(*esdf_, result.curve, options.clearance_check_step, exact_below);
+    result.min_clearance = MinVoxelClearance(*esdf_, result.curve, options.clearance_check_step, exact_below);
     safe = result.min_clearance >= required;
     if (!safe && result.min_clearance >= options.robot_radius) {
       // Above the radius at the samples but within half a step of it: a check 8 times denser
       // needs only 1/8 of the half-step margin (the curve may be fine in a tight gap).
       const double fine_step = options.clearance_check_step / 8.0;
       result.min_clearance = MinVoxelClearance(*esdf_, result.curve, fine_step, exact_below);
-      safe = result.min_clearance >= std::max(options.robot_radius,
-                                              std::min(required, options.robot_radius + 0.5 * fine_step));
+      safe = result.min_clearance >=
+             std::max(options.robot_radius, std::min(required, options.robot_radius + 0.5 * fine_step));
     }
     result.times.check_ms += MillisecondsSince(t);
     std::ostringstream outcome;
@@ -409,9 +414,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   result.path_length = result.curve.ArcLength(1e-6);
   if (!safe) {
     std::ostringstream s;
-    s << "the optimized curve comes within " << result.min_clearance
-      << " m of an obstacle (required: " << required << " m) after "
-      << result.spatial_attempts << " attempts";
+    s << "the optimized curve comes within " << result.min_clearance << " m of an obstacle (required: " << required
+      << " m) after " << result.spatial_attempts << " attempts";
     return finish(PlanStatus::kCollision, s.str());
   }
 
@@ -455,9 +459,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     case TemporalStatus::kInvalidInput:
       return finish(PlanStatus::kInvalidInput, "temporal stage: " + result.temporal.message);
     default:
-      return finish(PlanStatus::kTemporalFailure,
-                    std::string("temporal stage: ") + ToString(result.temporal.status) + ": " +
-                        result.temporal.message);
+      return finish(PlanStatus::kTemporalFailure, std::string("temporal stage: ") + ToString(result.temporal.status) +
+                                                      ": " + result.temporal.message);
   }
 }
 

@@ -14,9 +14,7 @@ namespace {
 constexpr double kMaxSteps = 1e8;
 constexpr double kMaxRecordedSteps = 1e7;
 
-bool PositiveFinite(const Eigen::Vector3d& v) {
-  return v.allFinite() && (v.array() > 0.0).all();
-}
+bool PositiveFinite(const Eigen::Vector3d& v) { return v.allFinite() && (v.array() > 0.0).all(); }
 
 // Largest |v(tau)| over tau in [0, dt] for v(tau) = v0 + a0 tau + u tau^2 / 2, and the tau where it
 // is reached: the ends, or the vertex tau = -a0 / u when it lies inside the step.
@@ -53,8 +51,9 @@ bool QuadrotorSimOptions::IsValid(std::string* error) const {
   if (!(time_step > 0.0 && std::isfinite(time_step))) return fail("time_step must be positive and finite");
   if (!(bandwidth > 0.0 && std::isfinite(bandwidth))) return fail("bandwidth must be positive and finite");
   if (bandwidth * time_step > 0.1) {
-    return fail("bandwidth * time_step must be <= 0.1 (at least 10 controller steps per time constant "
-                "1 / bandwidth)");
+    return fail(
+        "bandwidth * time_step must be <= 0.1 (at least 10 controller steps per time constant "
+        "1 / bandwidth)");
   }
   if (!(settle_time >= 0.0 && std::isfinite(settle_time))) return fail("settle_time must be >= 0 and finite");
   if (!(max_position_error > 0.0)) return fail("max_position_error must be positive (or infinity)");
@@ -78,8 +77,7 @@ FeasibilityReport QuadrotorSim::Run(const Trajectory& reference, const VehicleLi
   return Run([&reference](double t) { return reference.Evaluate(t); }, reference.duration(), limits);
 }
 
-FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
-                                    const VehicleLimits& limits) const {
+FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration, const VehicleLimits& limits) const {
   if (!reference) throw std::invalid_argument("QuadrotorSim::Run: the reference is empty");
   const TrajectoryState start = reference(0.0);
   return RunFrom(reference, duration, limits, start.velocity, start.acceleration);
@@ -88,12 +86,12 @@ FeasibilityReport QuadrotorSim::Run(const Reference& reference, double duration,
 FeasibilityReport QuadrotorSim::Fly(const Trajectory& reference, const VehicleLimits& limits,
                                     const Eigen::Vector3d& start_velocity,
                                     const Eigen::Vector3d& start_acceleration) const {
-  return RunFrom([&reference](double t) { return reference.Evaluate(t); }, reference.duration(),
-                 limits, start_velocity, start_acceleration);
+  return RunFrom([&reference](double t) { return reference.Evaluate(t); }, reference.duration(), limits, start_velocity,
+                 start_acceleration);
 }
 
-FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double duration,
-                                        const VehicleLimits& limits, const Eigen::Vector3d& start_velocity,
+FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double duration, const VehicleLimits& limits,
+                                        const Eigen::Vector3d& start_velocity,
                                         const Eigen::Vector3d& start_acceleration) const {
   if (!(duration >= 0.0 && std::isfinite(duration))) {
     throw std::invalid_argument("QuadrotorSim::Run: duration must be >= 0 and finite");
@@ -101,8 +99,9 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   // Per-axis limits may be +infinity (none on that axis) when the quadrotor's norms bound the flight.
   const auto positive = [](const Eigen::Vector3d& v) { return (v.array() > 0.0).all(); };
   if (!positive(limits.max_velocity) || (!limits.max_velocity.allFinite() && !limits.max_speed)) {
-    throw std::invalid_argument("QuadrotorSim::Run: limits.max_velocity must be positive (and finite unless "
-                                "max_speed is given)");
+    throw std::invalid_argument(
+        "QuadrotorSim::Run: limits.max_velocity must be positive (and finite unless "
+        "max_speed is given)");
   }
   if (!positive(limits.max_acceleration)) {
     throw std::invalid_argument("QuadrotorSim::Run: limits.max_acceleration must be positive");
@@ -135,8 +134,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
       r.acceleration.setZero();
       r.jerk.setZero();
     }
-    if (!r.position.allFinite() || !r.velocity.allFinite() || !r.acceleration.allFinite() ||
-        !r.jerk.allFinite()) {
+    if (!r.position.allFinite() || !r.velocity.allFinite() || !r.acceleration.allFinite() || !r.jerk.allFinite()) {
       std::ostringstream m;
       m << "QuadrotorSim::Run: the reference is not finite at t = " << t << " s";
       throw std::invalid_argument(m.str());
@@ -175,8 +173,8 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
                                   double h) {
     if (!quadrotor) return;
     const Eigen::Vector3d a1 = a0 + u0 * h;
-    speed = std::max({speed, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(),
-                      (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
+    speed = std::max(
+        {speed, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(), (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
     acc_norm = std::max({acc_norm, a0.norm(), a1.norm()});
     const Eigen::Vector3d w0 = a0 + up, w1 = a1 + up;
     thrust_max = std::max({thrust_max, w0.norm(), w1.norm()});
@@ -250,7 +248,8 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   if (limits.max_acceleration_norm) report.max_acceleration_norm_ratio = acc_norm / *limits.max_acceleration_norm;
   if (limits.max_thrust) report.max_thrust_ratio = thrust_max / *limits.max_thrust;
   if (limits.min_thrust) {
-    report.min_thrust_ratio = thrust_min > 0.0 ? *limits.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
+    report.min_thrust_ratio =
+        thrust_min > 0.0 ? *limits.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
   }
   if (limits.max_tilt) report.max_tilt_ratio = tilt / *limits.max_tilt;
   std::string quadrotor_failed;
@@ -294,12 +293,11 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
   }
   if (!acceleration_ok) {
     message << (velocity_ok ? "" : "; ") << "|a_" << AxisName(acceleration_axis) << "| reaches "
-            << report.max_acceleration_ratio << " x max_acceleration at t = " << report.max_acceleration_time
-            << " s";
+            << report.max_acceleration_ratio << " x max_acceleration at t = " << report.max_acceleration_time << " s";
   }
   if (report.clipped_steps > 0) {
-    message << "; the jerk limit clipped the command in " << report.clipped_steps << " of " << steps
-            << " steps (up to " << report.max_jerk_ratio << " x)";
+    message << "; the jerk limit clipped the command in " << report.clipped_steps << " of " << steps << " steps (up to "
+            << report.max_jerk_ratio << " x)";
   }
   report.message = message.str();
   return report;
@@ -307,19 +305,18 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
 
 QuadrotorSim::Reference SampledReference(std::vector<TrajectoryState> samples) {
   if (samples.size() < 2) {
-    throw std::invalid_argument("SampledReference: expected at least 2 samples, got " +
-                                std::to_string(samples.size()));
+    throw std::invalid_argument("SampledReference: expected at least 2 samples, got " + std::to_string(samples.size()));
   }
   const double t0 = samples.front().t;
   for (size_t k = 0; k < samples.size(); ++k) {
     TrajectoryState& s = samples[k];
-    if (!std::isfinite(s.t) || !s.position.allFinite() || !s.velocity.allFinite() ||
-        !s.acceleration.allFinite() || !s.jerk.allFinite()) {
+    if (!std::isfinite(s.t) || !s.position.allFinite() || !s.velocity.allFinite() || !s.acceleration.allFinite() ||
+        !s.jerk.allFinite()) {
       throw std::invalid_argument("SampledReference: sample " + std::to_string(k) + " is not finite");
     }
     if (k > 0 && !(s.t > samples[k - 1].t)) {
-      throw std::invalid_argument("SampledReference: sample times must increase strictly (sample " +
-                                  std::to_string(k) + ")");
+      throw std::invalid_argument("SampledReference: sample times must increase strictly (sample " + std::to_string(k) +
+                                  ")");
     }
   }
   for (TrajectoryState& s : samples) s.t -= t0;

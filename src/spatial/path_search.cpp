@@ -50,14 +50,22 @@ std::string Format(const Eigen::Vector3d& p) {
 
 const char* ToString(PathSearchStatus status) {
   switch (status) {
-    case PathSearchStatus::kSuccess: return "success";
-    case PathSearchStatus::kInvalidInput: return "invalid_input";
-    case PathSearchStatus::kStartOutsideMap: return "start_outside_map";
-    case PathSearchStatus::kGoalOutsideMap: return "goal_outside_map";
-    case PathSearchStatus::kStartInCollision: return "start_in_collision";
-    case PathSearchStatus::kGoalInCollision: return "goal_in_collision";
-    case PathSearchStatus::kUnreachable: return "unreachable";
-    case PathSearchStatus::kNodeLimit: return "node_limit";
+    case PathSearchStatus::kSuccess:
+      return "success";
+    case PathSearchStatus::kInvalidInput:
+      return "invalid_input";
+    case PathSearchStatus::kStartOutsideMap:
+      return "start_outside_map";
+    case PathSearchStatus::kGoalOutsideMap:
+      return "goal_outside_map";
+    case PathSearchStatus::kStartInCollision:
+      return "start_in_collision";
+    case PathSearchStatus::kGoalInCollision:
+      return "goal_in_collision";
+    case PathSearchStatus::kUnreachable:
+      return "unreachable";
+    case PathSearchStatus::kNodeLimit:
+      return "node_limit";
   }
   return "unknown";
 }
@@ -113,8 +121,8 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   const Eigen::AlignedBox3d domain = esdf.domain();
   auto outside = [&](const char* which, const Eigen::Vector3d& p) {
     std::ostringstream s;
-    s << which << " " << Format(p) << " is outside the map's domain " << Format(domain.min())
-      << " - " << Format(domain.max());
+    s << which << " " << Format(p) << " is outside the map's domain " << Format(domain.min()) << " - "
+      << Format(domain.max());
     return s.str();
   };
   if (!esdf.Contains(start)) return finish(PathSearchStatus::kStartOutsideMap, outside("start", start));
@@ -122,8 +130,7 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   const double radius = options.robot_radius;
   auto collides = [&](const char* which, const Eigen::Vector3d& p, double d) {
     std::ostringstream s;
-    s << which << " " << Format(p) << " has clearance " << d << " m, below the robot radius "
-      << radius << " m";
+    s << which << " " << Format(p) << " has clearance " << d << " m, below the robot radius " << radius << " m";
     return s.str();
   };
   const double d_start = esdf.Distance(start), d_goal = esdf.Distance(goal);
@@ -160,9 +167,7 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
     return Eigen::Vector3i(l.cwiseMax(0).cwiseMin(box.size - Eigen::Vector3i::Ones()));
   };
   auto linear = [&](const Eigen::Vector3i& l) { return l.x() + nx * (l.y() + ny * l.z()); };
-  auto decode = [&](int32_t i) {
-    return Eigen::Vector3i(i % nx, (i / nx) % ny, i / (nx * ny));
-  };
+  auto decode = [&](int32_t i) { return Eigen::Vector3i(i % nx, (i / nx) % ny, i / (nx * ny)); };
   auto centre = [&](const Eigen::Vector3i& l) {
     return Eigen::Vector3d(((l + box.min).cast<double>().array() + 0.5) * res);
   };
@@ -229,8 +234,8 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   }
   if (!found) {
     std::ostringstream s;
-    s << "no path with clearance " << radius << " m from " << Format(start) << " to " << Format(goal)
-      << " (" << result.expanded_nodes << " voxels expanded)";
+    s << "no path with clearance " << radius << " m from " << Format(start) << " to " << Format(goal) << " ("
+      << result.expanded_nodes << " voxels expanded)";
     return finish(PathSearchStatus::kUnreachable, s.str());
   }
 

@@ -116,25 +116,23 @@ void GaussLegendre(int n, std::vector<double>* nodes, std::vector<double>* weigh
 
 // ---- QuadraticFormCost ----
 
-QuadraticFormCost::QuadraticFormCost(const Eigen::MatrixXd& factor,
-                                     const Eigen::Matrix<double, 6, 1>& scale, double weight)
+QuadraticFormCost::QuadraticFormCost(const Eigen::MatrixXd& factor, const Eigen::Matrix<double, 6, 1>& scale,
+                                     double weight)
     : scaled_factor_(std::sqrt(weight) * factor * scale.asDiagonal()) {
   set_num_residuals(3 * static_cast<int>(factor.rows()));
   mutable_parameter_block_sizes()->assign({kJointSize, kJointSize});
 }
 
-bool QuadraticFormCost::Evaluate(double const* const* parameters, double* residuals,
-                                 double** jacobians) const {
+bool QuadraticFormCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const int rows = static_cast<int>(scaled_factor_.rows());
-  const Eigen::Matrix<double, 3, 6> q =
-      PieceData(parameters[0], parameters[1], Eigen::Matrix<double, 6, 1>::Ones());
+  const Eigen::Matrix<double, 3, 6> q = PieceData(parameters[0], parameters[1], Eigen::Matrix<double, 6, 1>::Ones());
   Eigen::Map<Eigen::MatrixXd> r(residuals, rows, 3);  // column a: axis a
   r.noalias() = scaled_factor_ * q.transpose();
   if (jacobians == nullptr) return true;
   for (int block = 0; block < 2; ++block) {
     if (jacobians[block] == nullptr) continue;
-    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kJointSize, Eigen::RowMajor>> j(
-        jacobians[block], 3 * rows, kJointSize);
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, kJointSize, Eigen::RowMajor>> j(jacobians[block], 3 * rows,
+                                                                                     kJointSize);
     j.setZero();
     for (int a = 0; a < 3; ++a) {
       for (int k = 0; k < 3; ++k) {
@@ -162,9 +160,8 @@ double CollisionPenalty::Value(double distance, double* derivative) const {
   return e - 1.0;
 }
 
-CollisionCost::CollisionCost(const DistanceField* field, const CollisionPenalty& penalty,
-                             int samples, const Eigen::Matrix<double, 6, 1>& scale, double weight,
-                             double tangent_epsilon)
+CollisionCost::CollisionCost(const DistanceField* field, const CollisionPenalty& penalty, int samples,
+                             const Eigen::Matrix<double, 6, 1>& scale, double weight, double tangent_epsilon)
     : field_(field), penalty_(penalty), scale_(scale), tangent_epsilon_(tangent_epsilon) {
   std::vector<double> weights;
   GaussLegendre(samples, &nodes_, &weights);
@@ -178,8 +175,7 @@ CollisionCost::CollisionCost(const DistanceField* field, const CollisionPenalty&
   mutable_parameter_block_sizes()->assign({kJointSize, kJointSize});
 }
 
-bool CollisionCost::Evaluate(double const* const* parameters, double* residuals,
-                             double** jacobians) const {
+bool CollisionCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const Eigen::Matrix<double, 3, 6> q = PieceData(parameters[0], parameters[1], scale_);
   const int n = static_cast<int>(nodes_.size());
   const double eps2 = tangent_epsilon_ * tangent_epsilon_;
@@ -213,8 +209,8 @@ bool CollisionCost::Evaluate(double const* const* parameters, double* residuals,
 
 // ---- DynamicPenaltyCost ----
 
-DynamicPenaltyCost::DynamicPenaltyCost(double duration, double max_velocity,
-                                       double max_acceleration, int samples, double weight)
+DynamicPenaltyCost::DynamicPenaltyCost(double duration, double max_velocity, double max_acceleration, int samples,
+                                       double weight)
     : scale_(PieceScale(duration)),
       inverse_duration_(1.0 / duration),
       max_velocity_(max_velocity),
@@ -229,8 +225,7 @@ DynamicPenaltyCost::DynamicPenaltyCost(double duration, double max_velocity,
   mutable_parameter_block_sizes()->assign({kJointSize, kJointSize});
 }
 
-bool DynamicPenaltyCost::Evaluate(double const* const* parameters, double* residuals,
-                                  double** jacobians) const {
+bool DynamicPenaltyCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
   const Eigen::Matrix<double, 3, 6> q = PieceData(parameters[0], parameters[1], scale_);
   const int n = static_cast<int>(basis1_.size());
   if (jacobians != nullptr) {
@@ -243,8 +238,7 @@ bool DynamicPenaltyCost::Evaluate(double const* const* parameters, double* resid
   for (int k = 0; k < n; ++k) {
     for (int order = 1; order <= 2; ++order) {
       const Eigen::Matrix<double, 6, 1>& basis = order == 1 ? basis1_[k] : basis2_[k];
-      const double time_factor =
-          order == 1 ? inverse_duration_ : inverse_duration_ * inverse_duration_;
+      const double time_factor = order == 1 ? inverse_duration_ : inverse_duration_ * inverse_duration_;
       const double limit = order == 1 ? max_velocity_ : max_acceleration_;
       const Eigen::Vector3d value = time_factor * (q * basis);
       for (int a = 0; a < 3; ++a) {
@@ -257,8 +251,7 @@ bool DynamicPenaltyCost::Evaluate(double const* const* parameters, double* resid
           if (jacobians[block] == nullptr) continue;
           for (int j = 0; j < 3; ++j) {
             const int b = 3 * block + j;
-            jacobians[block][r * kJointSize + 3 * j + a] =
-                sqrt_weight_ * sign * time_factor * basis(b) * scale_(b);
+            jacobians[block][r * kJointSize + 3 * j + a] = sqrt_weight_ * sign * time_factor * basis(b) * scale_(b);
           }
         }
       }

@@ -56,10 +56,8 @@ Eigen::Matrix<double, 3, 6> PieceData(const double* joint0, const double* joint1
 // integral (R = Factor(3)) or the integral of |f'|^2 (R = Factor(1)).
 class QuadraticFormCost final : public ceres::CostFunction {
  public:
-  QuadraticFormCost(const Eigen::MatrixXd& factor, const Eigen::Matrix<double, 6, 1>& scale,
-                    double weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  QuadraticFormCost(const Eigen::MatrixXd& factor, const Eigen::Matrix<double, 6, 1>& scale, double weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::MatrixXd scaled_factor_;  // sqrt(weight) * R * diag(S)
@@ -69,9 +67,9 @@ class QuadraticFormCost final : public ceres::CostFunction {
 //   g(d) = exp((d_safe - d) / decay) - 1  for d < d_safe,  0 otherwise,
 // an exponential penalty that vanishes at the safety distance with a continuous derivative of c.
 struct CollisionPenalty {
-  double safe_distance = 0.5;   // metres
-  double decay_length = 0.2;    // metres
-  double max_exponent = 30.0;   // the exponent is clamped here (no overflow deep inside obstacles)
+  double safe_distance = 0.5;  // metres
+  double decay_length = 0.2;   // metres
+  double max_exponent = 30.0;  // the exponent is clamped here (no overflow deep inside obstacles)
   // g and dg/dd at d.
   double Value(double distance, double* derivative) const;
 };
@@ -85,8 +83,7 @@ class CollisionCost final : public ceres::CostFunction {
  public:
   CollisionCost(const DistanceField* field, const CollisionPenalty& penalty, int samples,
                 const Eigen::Matrix<double, 6, 1>& scale, double weight, double tangent_epsilon);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   const DistanceField* field_;
@@ -102,10 +99,8 @@ class CollisionCost final : public ceres::CostFunction {
 // then 3 acceleration axes, each sqrt(weight) * max(0, |value| - limit).
 class DynamicPenaltyCost final : public ceres::CostFunction {
  public:
-  DynamicPenaltyCost(double duration, double max_velocity, double max_acceleration, int samples,
-                     double weight);
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+  DynamicPenaltyCost(double duration, double max_velocity, double max_acceleration, int samples, double weight);
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
 
  private:
   Eigen::Matrix<double, 6, 1> scale_;

@@ -61,9 +61,12 @@ bool FromString(const std::string& text, SpatialFormulation* formulation) {
 
 const char* ToString(SpatialParameterization parameterization) {
   switch (parameterization) {
-    case SpatialParameterization::kUniform: return "uniform";
-    case SpatialParameterization::kChordal: return "chordal";
-    case SpatialParameterization::kCentripetal: return "centripetal";
+    case SpatialParameterization::kUniform:
+      return "uniform";
+    case SpatialParameterization::kChordal:
+      return "chordal";
+    case SpatialParameterization::kCentripetal:
+      return "centripetal";
   }
   return "unknown";
 }
@@ -74,10 +77,14 @@ bool FromString(const std::string& text, SpatialParameterization* parameterizati
 
 const char* ToString(SpatialStatus status) {
   switch (status) {
-    case SpatialStatus::kConverged: return "converged";
-    case SpatialStatus::kIterationLimit: return "iteration_limit";
-    case SpatialStatus::kInvalidInput: return "invalid_input";
-    case SpatialStatus::kFailure: return "failure";
+    case SpatialStatus::kConverged:
+      return "converged";
+    case SpatialStatus::kIterationLimit:
+      return "iteration_limit";
+    case SpatialStatus::kInvalidInput:
+      return "invalid_input";
+    case SpatialStatus::kFailure:
+      return "failure";
   }
   return "unknown";
 }
@@ -221,27 +228,23 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     // In time: integral_0^T |d3p/dt3|^2 dt = J_s / T^5 and integral_0^T |dp/dt|^2 dt = L_s / T.
     if (options.smoothness_weight > 0.0) {
       smooth_ids.push_back(problem.AddResidualBlock(
-          new spatial_internal::QuadraticFormCost(jerk_factor, scale,
-                                                  options.smoothness_weight / std::pow(t, 5)),
+          new spatial_internal::QuadraticFormCost(jerk_factor, scale, options.smoothness_weight / std::pow(t, 5)),
           nullptr, x0, x1));
     }
     if (options.length_weight > 0.0) {
       length_ids.push_back(problem.AddResidualBlock(
-          new spatial_internal::QuadraticFormCost(length_factor, scale, options.length_weight / t),
-          nullptr, x0, x1));
+          new spatial_internal::QuadraticFormCost(length_factor, scale, options.length_weight / t), nullptr, x0, x1));
     }
     if (options.collision_weight > 0.0) {
       collision_ids.push_back(problem.AddResidualBlock(
-          new spatial_internal::CollisionCost(&field, penalty, options.collision_samples_per_piece,
-                                              scale, options.collision_weight,
-                                              options.tangent_epsilon),
+          new spatial_internal::CollisionCost(&field, penalty, options.collision_samples_per_piece, scale,
+                                              options.collision_weight, options.tangent_epsilon),
           nullptr, x0, x1));
     }
     if (coupled && options.dynamic_weight > 0.0) {
       dynamic_ids.push_back(problem.AddResidualBlock(
           new spatial_internal::DynamicPenaltyCost(t, options.max_velocity, options.max_acceleration,
-                                                   options.dynamic_samples_per_piece,
-                                                   options.dynamic_weight),
+                                                   options.dynamic_samples_per_piece, options.dynamic_weight),
           nullptr, x0, x1));
     }
   }
@@ -271,9 +274,8 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     ceres::Solver::Options solver;
     solver.minimizer_type = ceres::TRUST_REGION;
     solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver.linear_solver_type = options.linear_solver == SpatialLinearSolver::kDenseQr
-                                    ? ceres::DENSE_QR
-                                    : ceres::SPARSE_NORMAL_CHOLESKY;
+    solver.linear_solver_type =
+        options.linear_solver == SpatialLinearSolver::kDenseQr ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
     solver.max_num_iterations = options.max_iterations;
     solver.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
     solver.function_tolerance = options.function_tolerance;
@@ -322,8 +324,8 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
   pieces.reserve(m);
   for (int i = 0; i < m; ++i) {
     const double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
-    const Eigen::Matrix<double, 3, 6> q = spatial_internal::PieceData(
-        x0, x0 + kJointSize, spatial_internal::PieceScale(durations[i]));
+    const Eigen::Matrix<double, 3, 6> q =
+        spatial_internal::PieceData(x0, x0 + kJointSize, spatial_internal::PieceScale(durations[i]));
     pieces.emplace_back(PolynomialPiece::Coefficients(q * hermite.monomials().transpose()));
   }
   result.curve = PiecewiseCurve(std::move(pieces));

@@ -99,7 +99,10 @@ struct Pair {
   friend Pair operator*(Pair a, Pair b) { return Pair(_mm_mul_pd(a.v, b.v)); }
   friend Pair operator/(Pair a, Pair b) { return Pair(_mm_div_pd(a.v, b.v)); }
   Pair operator-() const { return Pair(_mm_sub_pd(_mm_setzero_pd(), v)); }
-  Pair& operator+=(Pair a) { v = _mm_add_pd(v, a.v); return *this; }
+  Pair& operator+=(Pair a) {
+    v = _mm_add_pd(v, a.v);
+    return *this;
+  }
 };
 inline Pair LoadPair(const double* p) { return Pair(_mm_loadu_pd(p)); }
 inline void StorePair(double* p, Pair a) { _mm_storeu_pd(p, a.v); }
@@ -126,10 +129,17 @@ struct Pair {
   friend Pair operator*(Pair x, Pair y) { return {x.a * y.a, x.b * y.b}; }
   friend Pair operator/(Pair x, Pair y) { return {x.a / y.a, x.b / y.b}; }
   Pair operator-() const { return {-a, -b}; }
-  Pair& operator+=(Pair x) { a += x.a; b += x.b; return *this; }
+  Pair& operator+=(Pair x) {
+    a += x.a;
+    b += x.b;
+    return *this;
+  }
 };
 inline Pair LoadPair(const double* p) { return {p[0], p[1]}; }
-inline void StorePair(double* p, Pair x) { p[0] = x.a; p[1] = x.b; }
+inline void StorePair(double* p, Pair x) {
+  p[0] = x.a;
+  p[1] = x.b;
+}
 inline Pair MaxPair(Pair x, Pair y) { return {std::max(x.a, y.a), std::max(x.b, y.b)}; }
 inline double SumPair(Pair x) { return x.a + x.b; }
 inline double MaxOfPair(Pair x) { return std::max(x.a, x.b); }
@@ -166,7 +176,9 @@ struct Band {
     p = bandwidth;
     v.assign(static_cast<size_t>(n) * static_cast<size_t>(p + 1), 0.0);
   }
-  double& At(int i, int j) { return v[static_cast<size_t>(i) * static_cast<size_t>(p + 1) + static_cast<size_t>(i - j)]; }
+  double& At(int i, int j) {
+    return v[static_cast<size_t>(i) * static_cast<size_t>(p + 1) + static_cast<size_t>(i - j)];
+  }
   // Adds a to (i, j) and, for i != j, its mirror (stored once).
   void Add(int i, int j, double a) { At(std::max(i, j), std::min(i, j)) += a; }
 
@@ -290,8 +302,10 @@ bool GreedyProfile(const BandedProblem& p, std::vector<double>* out, double marg
   for (size_t r = 0; r < p.rows.size(); ++r) {
     const BandedRow& row = p.rows[r];
     const double h = p.h[r] + margin * std::max(1.0, std::abs(p.h[r]));
-    if (row.count == 1) chain.Add(row.first, row.v[0], row.first, 0.0, h);
-    else chain.Add(row.first, row.v[0], row.first + 1, row.v[1], h);
+    if (row.count == 1)
+      chain.Add(row.first, row.v[0], row.first, 0.0, h);
+    else
+      chain.Add(row.first, row.v[0], row.first + 1, row.v[1], h);
   }
   if (!chain.CapUnbounded()) return false;
   std::vector<double> lo, hi;
@@ -350,7 +364,10 @@ struct Quad {
   TIMEOPT_AVX2 explicit Quad(__m256d a) : v(a) {}
   TIMEOPT_AVX2 Quad(double a) : v(_mm256_set1_pd(a)) {}  // NOLINT: broadcast, as a double converts
   TIMEOPT_AVX2 Quad operator-() const { return Quad(_mm256_sub_pd(_mm256_setzero_pd(), v)); }
-  TIMEOPT_AVX2 Quad& operator+=(Quad a) { v = _mm256_add_pd(v, a.v); return *this; }
+  TIMEOPT_AVX2 Quad& operator+=(Quad a) {
+    v = _mm256_add_pd(v, a.v);
+    return *this;
+  }
 };
 TIMEOPT_AVX2 inline Quad operator+(Quad a, Quad b) { return Quad(_mm256_add_pd(a.v, b.v)); }
 TIMEOPT_AVX2 inline Quad operator-(Quad a, Quad b) { return Quad(_mm256_sub_pd(a.v, b.v)); }
@@ -405,13 +422,14 @@ struct BandedIpmWorkspace::Buffers {
   std::vector<double> v[kMaxRowSpan];
   std::vector<CellWindow> windows;
   std::vector<char> shares;  // per cell: its first value is the previous cell's last (EvaluateCells)
-  Band hess, factor;  // factor: see Band::Factor
-  Band matrix;        // the Newton matrix before factoring (for a regularized factorization)
+  Band hess, factor;         // factor: see Band::Factor
+  Band matrix;               // the Newton matrix before factoring (for a regularized factorization)
   void Clear() {
     runs.clear();
     order.clear();
     starts.clear();
-    for (std::vector<double>* u : {&x, &s, &z, &grad, &rd, &rp, &dx, &ds, &dz, &inv_sz, &gz, &g_inv_s, &g_cross, &g_dz, &rhs}) {
+    for (std::vector<double>* u :
+         {&x, &s, &z, &grad, &rd, &rp, &dx, &ds, &dz, &inv_sz, &gz, &g_inv_s, &g_cross, &g_dz, &rhs}) {
       u->clear();
     }
     for (std::vector<double>& u : v) u.clear();
@@ -527,7 +545,8 @@ class BandedIpm {
         for (size_t v = 0; v < out.x.size(); ++v) out.x[v] = p_.x_form[v].Value(x_);
         out.y.assign(x_.begin(), x_.begin() + n_);
         out.z.assign(p_.rows.size(), 0.0);
-        for (int r = 0; r < m_; ++r) out.z[static_cast<size_t>(order_[static_cast<size_t>(r)])] = z_[static_cast<size_t>(r)];
+        for (int r = 0; r < m_; ++r)
+          out.z[static_cast<size_t>(order_[static_cast<size_t>(r)])] = z_[static_cast<size_t>(r)];
         return out;
       }
       if (it >= settings_.max_iterations) {
@@ -689,8 +708,10 @@ class BandedIpm {
         }
         if (free0 && free1) {
           const double cross = s0 * s1 * h01;
-          if (v0 == v1) hess_.Add(v0, v0, 2.0 * cross);
-          else hess_.Add(v0, v1, cross);
+          if (v0 == v1)
+            hess_.Add(v0, v0, 2.0 * cross);
+          else
+            hess_.Add(v0, v1, cross);
         }
         continue;
       }
@@ -812,9 +833,10 @@ class BandedIpm {
       if (!second_order || !(gap + alpha * totals_c.s1 + alpha * alpha * totals_c.s2 > kGapGrowth * gap)) break;
     }
     if (!(alpha > 0.0)) return false;
-    // The step, and r_p, G'z and the figures Converged reads after it.
+      // The step, and r_p, G'z and the figures Converged reads after it.
 #if TIMEOPT_AVX2_ROWS
-    if (wide_) avx2::StepPass<W>(Rows(), m_, alpha, &rp_max_, &gap_);
+    if (wide_)
+      avx2::StepPass<W>(Rows(), m_, alpha, &rp_max_, &gap_);
     else
 #endif
       generic::StepPass<W>(Rows(), m_, alpha, &rp_max_, &gap_);
@@ -869,18 +891,19 @@ class BandedIpm {
   // G'z (kept through the steps), and the sums over the rows of one iteration: G' (1 / s),
   // G' (ds_a o dz_a / s), G' dz, and the predictor's right-hand side.
   std::vector<double>&gz_ = b_.gz, &g_inv_s_ = b_.g_inv_s, &g_cross_ = b_.g_cross, &g_dz_ = b_.g_dz, &rhs_ = b_.rhs;
-  std::vector<double> (&v_)[kMaxRowSpan] = b_.v;  // the rows' coefficients as columns (the first W)
+  std::vector<double> (&v_)[kMaxRowSpan] = b_.v;   // the rows' coefficients as columns (the first W)
   std::vector<CellWindow>& windows_ = b_.windows;  // per cell (over control values only)
   std::vector<char>& shares_ = b_.shares;          // per cell
   double objective_ = 0.0;
-  double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;   // from RowResiduals and Step
+  double rp_max_ = 0.0, h_max_ = 1.0, gap_ = 0.0;  // from RowResiduals and Step
   const bool wide_ = RowPassesAvx2();
   Band &hess_ = b_.hess, &factor_ = b_.factor, &matrix_ = b_.matrix;
 };
 
 }  // namespace
 
-bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound, bool is_essential) {
+bool BandedProblem::AddRow(const std::vector<std::pair<int, double>>& terms, double sign, double bound,
+                           bool is_essential) {
   BandedRow row;
   row.kind = static_cast<short>(kind);
   double constant = 0.0;
@@ -1083,7 +1106,8 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
   }
   for (int v = 0; v < d.num_vars; ++v) {
     single[0] = {v, 1.0};
-    if (std::isfinite(d.var_upper[static_cast<size_t>(v)])) fits = p.AddRow(single, 1.0, d.var_upper[static_cast<size_t>(v)], true) && fits;
+    if (std::isfinite(d.var_upper[static_cast<size_t>(v)]))
+      fits = p.AddRow(single, 1.0, d.var_upper[static_cast<size_t>(v)], true) && fits;
   }
   if (!fits) {
     *why = "a row over more than four unknowns, or a constant row violated";

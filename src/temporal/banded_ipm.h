@@ -96,13 +96,13 @@ struct BandedCell {
 struct BandedProblem {
   int n = 0;
   int bandwidth = 1;
-  bool controls = false;              // y are control values (else the free values themselves)
+  bool controls = false;  // y are control values (else the free values themselves)
   std::vector<BandedRow> rows;
   std::vector<double> h;
   std::vector<BandedCell> cells;
   std::vector<ControlForm> grid_form;  // b at every grid value
   std::vector<ControlForm> x_form;     // every free value of d
-  std::vector<double> cap;            // per unknown: a size for the uniform part of the start
+  std::vector<double> cap;             // per unknown: a size for the uniform part of the start
   // Per row: 1 for the rows a working set always keeps (the bounds -y <= 0 and x <= var_upper,
   // rows with h <= 0), which keep every unknown bounded whatever else is left out.
   std::vector<char> essential;
@@ -170,10 +170,10 @@ struct WaitingRow {
 struct SolveWorkspace {
   BandedIpmWorkspace ipm;
   BandedProblem problem;
-  JerkTemplates templates, coarse_templates;  // of the grid and of the coarse programme's grid
-  std::vector<char> row_state;  // per template row: waiting, in the problem, or none
-  std::vector<WaitingRow> waiting_rows;        // per template row
-  std::vector<double> multipliers;             // per row id (SolveStructuredScp's z_by_id)
+  JerkTemplates templates, coarse_templates;      // of the grid and of the coarse programme's grid
+  std::vector<char> row_state;                    // per template row: waiting, in the problem, or none
+  std::vector<WaitingRow> waiting_rows;           // per template row
+  std::vector<double> multipliers;                // per row id (SolveStructuredScp's z_by_id)
   std::vector<BandedProblem::CellMap> cell_maps;  // per grid value (by a cell's first)
 };
 

@@ -312,7 +312,8 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
     const auto add = [&](size_t grid, double w) {
       const ControlForm& f = basis.grid[grid];
       read.constant += w * f.constant;
-      for (int t = 0; t < f.count; ++t) ok = ok && read.Add(Form::Control(f.first + t, f.coef[static_cast<size_t>(t)]), w);
+      for (int t = 0; t < f.count; ++t)
+        ok = ok && read.Add(Form::Control(f.first + t, f.coef[static_cast<size_t>(t)]), w);
     };
     if (basis.at_knot[static_cast<size_t>(c)]) {
       add(g, 1.0);

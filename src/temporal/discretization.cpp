@@ -18,16 +18,17 @@ namespace timeopt {
 
 const char* ToString(JointType type) {
   switch (type) {
-    case JointType::kC1: return "C1";
-    case JointType::kG1: return "G1";
-    case JointType::kStop: return "stop";
+    case JointType::kC1:
+      return "C1";
+    case JointType::kG1:
+      return "G1";
+    case JointType::kStop:
+      return "stop";
   }
   return "unknown";
 }
 
-bool FromString(const std::string& text, JointType* type) {
-  return EnumFromString(text, kJointTypes, type);
-}
+bool FromString(const std::string& text, JointType* type) { return EnumFromString(text, kJointTypes, type); }
 
 namespace {
 
@@ -54,8 +55,7 @@ void PruneCellRows(std::vector<CellRow>* rows) {
   // Start: the largest w0 (ties: the largest w1), optimal for b = (1, 0).
   size_t current = 0;
   for (size_t j = 1; j < r.size(); ++j) {
-    if (r[j].w(0) > r[current].w(0) ||
-        (r[j].w(0) == r[current].w(0) && r[j].w(1) > r[current].w(1))) {
+    if (r[j].w(0) > r[current].w(0) || (r[j].w(0) == r[current].w(0) && r[j].w(1) > r[current].w(1))) {
       current = j;
     }
   }
@@ -84,7 +84,6 @@ void PruneCellRows(std::vector<CellRow>* rows) {
   }
   r.assign(kept.begin(), kept.end());
 }
-
 
 // True if x <= l A + (1 - l) C componentwise for some l in [0, 1]: then x . b <= max(A . b, C . b)
 // for every b >= 0, so the row x . b <= 1 follows from A . b <= 1 and C . b <= 1.
@@ -131,7 +130,7 @@ void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   thread_local std::vector<CellRow> out;
   kept.assign(1, 0);
   factor.assign(r.size(), 1.0);
-  size_t run_start = 1;   // first dropped vertex of the current run (empty run if it is i)
+  size_t run_start = 1;     // first dropped vertex of the current run (empty run if it is i)
   double run_factor = 1.0;  // the factor the current run needs with its next vertex
   auto close_run = [&](size_t next) {
     if (run_start < next) {
@@ -266,15 +265,16 @@ void KeepTightestUpperBounds(TemporalDiscretization* d) {
 }
 
 // Boundary grid value from a given velocity and the tangent there; a free value gets `scale`.
-GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
-                        const TemporalProblem& p, const std::string& field, double scale, int* next_var) {
+GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent, const TemporalProblem& p,
+                        const std::string& field, double scale, int* next_var) {
   GridValue g;
   const double tn = tangent.norm();
   const double vn = velocity.norm();
   if (tn <= p.zero_tangent_tolerance) {
     if (vn != 0.0) {
-      throw std::invalid_argument(field + ": the curve's tangent vanishes there, so only a zero "
-                                          "velocity is possible");
+      throw std::invalid_argument(field +
+                                  ": the curve's tangent vanishes there, so only a zero "
+                                  "velocity is possible");
     }
     g.var = (*next_var)++;  // v = f' sqrt(b) = 0 for any b: b is free
     g.scale = scale;
@@ -287,8 +287,8 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
   const double angle = Angle(velocity, tangent);
   if (angle > p.parallel_tolerance) {
     std::ostringstream ss;
-    ss << field << ": must be parallel to the curve's tangent (" << tangent.transpose()
-       << "), the angle is " << angle << " rad";
+    ss << field << ": must be parallel to the curve's tangent (" << tangent.transpose() << "), the angle is " << angle
+       << " rad";
     throw std::invalid_argument(ss.str());
   }
   g.fixed = (vn / tn) * (vn / tn);
@@ -331,8 +331,8 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
 // One grid value per grid point: a scaled free variable, a fixed value (boundary speeds, stops),
 // or a value shared with the previous piece at a smooth joint. Returns the tangent f'(k ds) at
 // every grid point, also used by the paper's velocity rows.
-std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
-                                              TemporalDiscretization* out, FreeBoundaries* free) {
+std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem, TemporalDiscretization* out,
+                                              FreeBoundaries* free) {
   TemporalDiscretization& d = *out;
   const PiecewiseCurve& curve = problem.curve;
   const int m = curve.num_pieces();
@@ -386,7 +386,8 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
     for (int i = 0; i < m; ++i) {
       for (int k = 0; k < K; ++k) path += grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm() / K;
     }
-    const double boundary2 = std::max(problem.boundary.start_velocity.squaredNorm(), problem.boundary.end_velocity.squaredNorm());
+    const double boundary2 =
+        std::max(problem.boundary.start_velocity.squaredNorm(), problem.boundary.end_velocity.squaredNorm());
     // (The grid's tangents can all vanish, a minimum-jerk piece at K = 1: no length, no cap.)
     if (accel > 0.0 && std::isfinite(accel) && std::isfinite(path) && boundary2 + path > 0.0) {
       reach2 = kUnreachableSpeedShare * (boundary2 + 2.0 * accel * path);
@@ -439,8 +440,7 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
           g = prev;
           g.scale = prev.scale * j.speed_ratio * j.speed_ratio;
         }
-      } else if (k == K && i + 1 < m &&
-                 d.joints[static_cast<size_t>(i)].type == JointType::kStop) {
+      } else if (k == K && i + 1 < m && d.joints[static_cast<size_t>(i)].type == JointType::kStop) {
         g = GridValue{};  // fixed 0: the vehicle stops at the kink
       } else {
         g.var = next_var++;
@@ -481,8 +481,8 @@ void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out) {
     for (int k = 0; k < K; ++k) d.cells.push_back(Cell{i, d.GridIndex(i, k), ds});
   }
   for (const Cell& c : d.cells) {
-    if (d.grid[c.first_grid].var < 0 && d.grid[c.first_grid].fixed == 0.0 &&
-        d.grid[c.first_grid + 1].var < 0 && d.grid[c.first_grid + 1].fixed == 0.0) {
+    if (d.grid[c.first_grid].var < 0 && d.grid[c.first_grid].fixed == 0.0 && d.grid[c.first_grid + 1].var < 0 &&
+        d.grid[c.first_grid + 1].fixed == 0.0) {
       std::ostringstream ss;
       ss << "piece " << c.piece << " must start and end at rest (zero speed at both ends of a "
          << "single cell): it cannot be traversed with K = " << K << "; use K >= 2";
@@ -492,9 +492,8 @@ void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out) {
 }
 
 // Velocity at grid points (paper mode, eq. 41): f'_axis(s_k)^2 b_k <= vmax^2.
-void AddPaperVelocityRows(const TemporalProblem& problem,
-                          const std::vector<Eigen::Vector3d>& grid_tangent, RowBuilder& row,
-                          TemporalDiscretization* out) {
+void AddPaperVelocityRows(const TemporalProblem& problem, const std::vector<Eigen::Vector3d>& grid_tangent,
+                          RowBuilder& row, TemporalDiscretization* out) {
   TemporalDiscretization& d = *out;
   const int m = problem.curve.num_pieces();
   const int K = problem.cells_per_piece;
@@ -513,9 +512,8 @@ void AddPaperVelocityRows(const TemporalProblem& problem,
           ub = std::min(ub, speed2 / (t.squaredNorm() * v.scale));
         } else {
           row.Add(g, t.squaredNorm());
-          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(), speed2, [&] {
-            return "squared speed at piece " + std::to_string(i) + " s=" + std::to_string(k * ds);
-          });
+          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(), speed2,
+                     [&] { return "squared speed at piece " + std::to_string(i) + " s=" + std::to_string(k * ds); });
         }
       }
       for (int a = 0; a < 3; ++a) {
@@ -530,11 +528,10 @@ void AddPaperVelocityRows(const TemporalProblem& problem,
           ub = std::min(ub, vmax2(a) / (t2 * v.scale));
         } else {
           row.Add(g, t2);
-          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(),
-                     vmax2(a), [&] {
-                       return std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " +
-                              std::to_string(i) + " s=" + std::to_string(k * ds);
-                     });
+          row.Finish(LinearRow::Kind::kVelocity, -std::numeric_limits<double>::infinity(), vmax2(a), [&] {
+            return std::string("squared velocity on axis ") + kAxisNames[a] + " at piece " + std::to_string(i) +
+                   " s=" + std::to_string(k * ds);
+          });
         }
       }
     }
@@ -580,9 +577,8 @@ double QuadrotorAccelerationCap(const TemporalLimits& limits) {
 }
 
 void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vector<int>& grid,
-                                  const std::vector<Eigen::Vector3d>& coef,
-                                  const std::function<std::string()>& where, RowBuilder& row,
-                                  TemporalDiscretization* d) {
+                                  const std::vector<Eigen::Vector3d>& coef, const std::function<std::string()>& where,
+                                  RowBuilder& row, TemporalDiscretization* d) {
   const double g = limits.gravity;
   const auto add_cone = [&](ConeRow::Kind kind, double scale, const Eigen::Vector3d& constant,
                             const Eigen::Vector3d& mask, double bound_per_z, const char* what) {
@@ -629,8 +625,7 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
     // ||acc_xy|| <= tan(tilt) (acc_z + g), scaled by tan(tilt) g; and acc_z + g >= 0 (the cone
     // implies it; the Ipopt backend's smooth form needs it written).
     const double tan_tilt = std::tan(*limits.max_tilt);
-    add_cone(ConeRow::Kind::kTilt, tan_tilt * g, Eigen::Vector3d::Zero(), horizontal, tan_tilt,
-             "limits.max_tilt");
+    add_cone(ConeRow::Kind::kTilt, tan_tilt * g, Eigen::Vector3d::Zero(), horizontal, tan_tilt, "limits.max_tilt");
     add_vertical(-g, "thrust pointing up (limits.max_tilt)");
   }
   if (limits.min_thrust) add_vertical(*limits.min_thrust - g, "limits.min_thrust (acc_z + gravity)");
@@ -648,7 +643,8 @@ void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscreti
       ss << "limits.min_thrust (" << *l.min_thrust << " m/s^2) cannot hold at " << field << " (" << acc.transpose()
          << " m/s^2: vertical thrust " << thrust(2) << ")";
     } else if (l.max_thrust && thrust.norm() > *l.max_thrust * (1.0 + kConstantRowSlack)) {
-      ss << "limits.max_thrust (" << *l.max_thrust << " m/s^2) is exceeded at " << field << " (thrust " << thrust.norm() << ")";
+      ss << "limits.max_thrust (" << *l.max_thrust << " m/s^2) is exceeded at " << field << " (thrust " << thrust.norm()
+         << ")";
     } else if (l.max_acceleration_norm && acc.norm() > *l.max_acceleration_norm * (1.0 + kConstantRowSlack)) {
       ss << "limits.max_acceleration_norm (" << *l.max_acceleration_norm << ") is exceeded at " << field << " ("
          << acc.norm() << ")";
@@ -693,7 +689,7 @@ void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscreti
 // (b^k, b^{k+1}): f' (b1 - b0) / (2 ds) + f'' (b0 + b1) / 2. Used by the paper's acceleration
 // rows and by the acceleration-change rows in both modes. Also sets acceleration_norm_scale.
 std::vector<Eigen::Matrix<double, 3, 2>> MidCellAccelerations(const TemporalProblem& problem,
-                                                               TemporalDiscretization* out) {
+                                                              TemporalDiscretization* out) {
   TemporalDiscretization& d = *out;
   const PiecewiseCurve& curve = problem.curve;
   const double ds = 1.0 / problem.cells_per_piece;
@@ -735,9 +731,8 @@ std::vector<Eigen::Matrix<double, 3, 2>> MidCellAccelerations(const TemporalProb
 
 // Per-cell rows over (b^k, b^{k+1}): the paper's acceleration at the cell middle, or certified
 // mode's Bernstein coefficients of velocity and acceleration over the whole cell.
-void AddCellRows(const TemporalProblem& problem,
-                 const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc, RowBuilder& row,
-                 TemporalDiscretization* out) {
+void AddCellRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc,
+                 RowBuilder& row, TemporalDiscretization* out) {
   TemporalDiscretization& d = *out;
   const PiecewiseCurve& curve = problem.curve;
   const int m = curve.num_pieces();
@@ -755,8 +750,7 @@ void AddCellRows(const TemporalProblem& problem,
     for (int i = 0; i < m; ++i) {
       if (curve.piece(i).degree() > 30) {
         throw std::invalid_argument("curve piece " + std::to_string(i) + " has degree " +
-                                    std::to_string(curve.piece(i).degree()) +
-                                    "; certified mode supports degree <= 30");
+                                    std::to_string(curve.piece(i).degree()) + "; certified mode supports degree <= 30");
       }
       first_derivative.push_back(curve.piece(i).Derivative(1).coefficients());
       second_derivative.push_back(curve.piece(i).Derivative(2).coefficients());
@@ -866,8 +860,7 @@ void AddCellRows(const TemporalProblem& problem,
 
 // Acceleration change (eqs. 44-45) between neighbouring cells and against the boundary
 // accelerations (eqs. 48-49), when max_acceleration_change is set.
-void AddAccelerationChangeRows(const TemporalProblem& problem,
-                               const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc,
+void AddAccelerationChangeRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc,
                                RowBuilder& row, TemporalDiscretization* out) {
   TemporalDiscretization& d = *out;
   const TemporalLimits& limits = problem.limits;

@@ -65,7 +65,8 @@ inline double PieceLengthEstimate(const PiecewiseCurve& curve, int piece) {
 // middles.
 inline double HalfPointS(const std::vector<double>& edges, int j) {
   const int k = std::min(j / 2, static_cast<int>(edges.size()) - 2);
-  return edges[static_cast<size_t>(k)] + 0.5 * (j - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
+  return edges[static_cast<size_t>(k)] +
+         0.5 * (j - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
 }
 
 inline double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -208,9 +209,8 @@ class RowBuilder {
 };
 
 // Boundary grid value from a given velocity and the tangent there; a free value gets `scale`.
-GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent,
-                        const TemporalProblem& p, const std::string& field, double scale,
-                        int* next_var);
+GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& tangent, const TemporalProblem& p,
+                        const std::string& field, double scale, int* next_var);
 // The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
 void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
 // One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
@@ -218,8 +218,8 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
 // With `free` set, a boundary with a non-zero speed gets a free value instead of a fixed one,
 // bounded above by the given b (see FreeBoundaries).
 struct FreeBoundaries;
-std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem,
-                                              TemporalDiscretization* out, FreeBoundaries* free = nullptr);
+std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem, TemporalDiscretization* out,
+                                              FreeBoundaries* free = nullptr);
 // The cells (problem.cells_per_piece per piece), and the verdict on a piece of one cell that must
 // start and end at rest.
 void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
@@ -248,9 +248,8 @@ double QuadrotorAccelerationCap(const TemporalLimits& limits);
 // largest thrust and the tilt, linear rows (through `row`) for the smallest thrust and the thrust
 // pointing up; a row on fixed values only is decided at once (infeasible_reason naming where()).
 void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vector<int>& grid,
-                                  const std::vector<Eigen::Vector3d>& coef,
-                                  const std::function<std::string()>& where, RowBuilder& row,
-                                  TemporalDiscretization* d);
+                                  const std::vector<Eigen::Vector3d>& coef, const std::function<std::string()>& where,
+                                  RowBuilder& row, TemporalDiscretization* d);
 
 // A linearized jerk row of a cell before its linearization point bbar is known (the sequential
 // convex programme's rows, see jerk_discretization.cpp): the row is
@@ -302,8 +301,8 @@ double LinearizationFloor(const std::vector<double>& linearization);
 // The control values of a jerk-limited discretization (ControlBasis; control_basis.cpp), from its
 // shapes, cell edges, grid values and joints, with the sddot that a boundary acceleration fixes at
 // the start and the end (none where it fixes none). A rest cell's middle value (q at its rest
-// point, see jerk_discretization.cpp) is a control of its own. A boundary where the tangent vanishes has b fixed by its acceleration instead
-// (boundary_b) and sddot free. Checked against every equality row of d; none when a case is not
+// point, see jerk_discretization.cpp) is a control of its own. A boundary where the tangent vanishes has b fixed by its
+// acceleration instead (boundary_b) and sddot free. Checked against every equality row of d; none when a case is not
 // covered.
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
                                               const std::optional<double> (&boundary_sddot)[2],

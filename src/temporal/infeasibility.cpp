@@ -133,8 +133,8 @@ Infeasibility DiagnoseInfeasible(const TemporalProblem& problem, const std::stri
       } else {
         const int fail = BrakingFailure(chain, given);
         detail << "from " << speed << " m/s the vehicle cannot brake in time for what lies ahead"
-               << (fail >= 0 ? " (" + Where(problem, d, fail) + ")" : std::string()) << "; the fastest start that can is "
-               << speed * speeds.start_factor << " m/s";
+               << (fail >= 0 ? " (" + Where(problem, d, fail) + ")" : std::string())
+               << "; the fastest start that can is " << speed * speeds.start_factor << " m/s";
         found = Infeasibility{"braking", fail >= 0 ? Where(problem, d, fail) : "start", detail.str()};
       }
     } else {
@@ -153,8 +153,8 @@ Infeasibility DiagnoseInfeasible(const TemporalProblem& problem, const std::stri
         std::ostringstream end_detail;
         end_detail << "the end speed " << speed << " m/s cannot be reached; the fastest end is "
                    << speed * speeds.end_factor << " m/s";
-        found = Infeasibility{given > chain.u[static_cast<size_t>(v)] * (1.0 + 1e-9) ? "boundary_speed" : "end_speed", "end",
-                              end_detail.str()};
+        found = Infeasibility{given > chain.u[static_cast<size_t>(v)] * (1.0 + 1e-9) ? "boundary_speed" : "end_speed",
+                              "end", end_detail.str()};
       }
     }
   }

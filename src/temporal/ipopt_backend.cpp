@@ -214,8 +214,8 @@ std::vector<double> IpoptTemporalNlp::StartingPoint() const {
   return x0;
 }
 
-bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
-                                    Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) {
+bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,
+                                    IndexStyleEnum& index_style) {
   n = d_.num_vars;
   m = static_cast<Ipopt::Index>(d_.rows.size() + cubic_.size() + cone_.size());
   nnz_jac_g = num_jacobian_entries_;
@@ -224,9 +224,8 @@ bool IpoptTemporalNlp::get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Ind
   return true;
 }
 
-bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u,
-                                       Ipopt::Index m, Ipopt::Number* g_l,
-                                       Ipopt::Number* g_u) {
+bool IpoptTemporalNlp::get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index m,
+                                       Ipopt::Number* g_l, Ipopt::Number* g_u) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
   const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
   if (n != d_.num_vars || m != cubic_end + static_cast<Ipopt::Index>(cone_.size())) return false;
@@ -256,9 +255,8 @@ bool IpoptTemporalNlp::get_constraints_linearity(Ipopt::Index m, LinearityType* 
   return true;
 }
 
-bool IpoptTemporalNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x,
-                                          bool init_z, Ipopt::Number* /*z_L*/,
-                                          Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
+bool IpoptTemporalNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z,
+                                          Ipopt::Number* /*z_L*/, Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
                                           bool init_lambda, Ipopt::Number* /*lambda*/) {
   // Only a primal start is provided (no warm_start_init_point).
   if (init_z || init_lambda || n != d_.num_vars) return false;
@@ -269,8 +267,7 @@ bool IpoptTemporalNlp::get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Nu
   return true;
 }
 
-bool IpoptTemporalNlp::eval_f(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
-                              Ipopt::Number& obj_value) {
+bool IpoptTemporalNlp::eval_f(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/, Ipopt::Number& obj_value) {
   obj_value = objective_scale_ * Objective(x);
   // b = 0 at both ends of a cell: infinite time. Ipopt then shortens its step.
   return std::isfinite(obj_value);
@@ -289,8 +286,7 @@ double IpoptTemporalNlp::Objective(const Ipopt::Number* x, bool time_only) const
   return time_only ? time : time + rho * reg;
 }
 
-bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool /*new_x*/,
-                                   Ipopt::Number* grad_f) {
+bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool /*new_x*/, Ipopt::Number* grad_f) {
   std::fill(grad_f, grad_f + n, 0.0);
   const double rho = d_.rho;
   for (const CellTerms& c : cells_) {
@@ -307,8 +303,8 @@ bool IpoptTemporalNlp::eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool 
   return true;
 }
 
-bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
-                              Ipopt::Index m, Ipopt::Number* g) {
+bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/, Ipopt::Index m,
+                              Ipopt::Number* g) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
   const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
   if (m != cubic_end + static_cast<Ipopt::Index>(cone_.size())) return false;
@@ -321,13 +317,13 @@ bool IpoptTemporalNlp::eval_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
     for (const auto& t : d_.rows[static_cast<size_t>(i)].terms) value += t.second * x[t.first];
     g[i] = value;
   }
-  for (size_t r = 0; r < cubic_.size(); ++r) g[linear + static_cast<Ipopt::Index>(r)] = cubic_[r].row->Value(CubicB(cubic_[r], x));
+  for (size_t r = 0; r < cubic_.size(); ++r)
+    g[linear + static_cast<Ipopt::Index>(r)] = cubic_[r].row->Value(CubicB(cubic_[r], x));
   return true;
 }
 
-bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* x,
-                                  bool /*new_x*/, Ipopt::Index m, Ipopt::Index nele_jac,
-                                  Ipopt::Index* iRow, Ipopt::Index* jCol,
+bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/, Ipopt::Index m,
+                                  Ipopt::Index nele_jac, Ipopt::Index* iRow, Ipopt::Index* jCol,
                                   Ipopt::Number* values) {
   const Ipopt::Index linear = static_cast<Ipopt::Index>(d_.rows.size());
   const Ipopt::Index cubic_end = linear + static_cast<Ipopt::Index>(cubic_.size());
@@ -379,9 +375,8 @@ bool IpoptTemporalNlp::eval_jac_g(Ipopt::Index /*n*/, const Ipopt::Number* x,
 }
 
 bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /*new_x*/,
-                              Ipopt::Number ipopt_obj_factor, Ipopt::Index /*m*/,
-                              const Ipopt::Number* lambda, bool /*new_lambda*/,
-                              Ipopt::Index nele_hess, Ipopt::Index* iRow, Ipopt::Index* jCol,
+                              Ipopt::Number ipopt_obj_factor, Ipopt::Index /*m*/, const Ipopt::Number* lambda,
+                              bool /*new_lambda*/, Ipopt::Index nele_hess, Ipopt::Index* iRow, Ipopt::Index* jCol,
                               Ipopt::Number* values) {
   const double obj_factor = objective_scale_ * ipopt_obj_factor;
   if (nele_hess != static_cast<Ipopt::Index>(hess_rows_.size())) return false;
@@ -413,7 +408,8 @@ bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
       for (int k = 0; k < 3; ++k) {
         if (c.hess[j][k] < 0) continue;
         double h = 0.0;
-        for (int l = 0; l < 3; ++l) h += c.row->coef[static_cast<size_t>(9 * j + 3 * k + l)] * b[static_cast<size_t>(l)];
+        for (int l = 0; l < 3; ++l)
+          h += c.row->coef[static_cast<size_t>(9 * j + 3 * k + l)] * b[static_cast<size_t>(l)];
         values[c.hess[j][k]] += weight * 6.0 * h * c.scale[j] * c.scale[k];
       }
     }
@@ -440,13 +436,10 @@ bool IpoptTemporalNlp::eval_h(Ipopt::Index /*n*/, const Ipopt::Number* x, bool /
   return true;
 }
 
-void IpoptTemporalNlp::finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n,
-                                         const Ipopt::Number* x, const Ipopt::Number* /*z_L*/,
-                                         const Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
-                                         const Ipopt::Number* /*g*/,
-                                         const Ipopt::Number* /*lambda*/,
-                                         Ipopt::Number /*obj_value*/,
-                                         const Ipopt::IpoptData* /*ip_data*/,
+void IpoptTemporalNlp::finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n, const Ipopt::Number* x,
+                                         const Ipopt::Number* /*z_L*/, const Ipopt::Number* /*z_U*/, Ipopt::Index /*m*/,
+                                         const Ipopt::Number* /*g*/, const Ipopt::Number* /*lambda*/,
+                                         Ipopt::Number /*obj_value*/, const Ipopt::IpoptData* /*ip_data*/,
                                          Ipopt::IpoptCalculatedQuantities* /*ip_cq*/) {
   solver_return_ = status;
   solution_.assign(x, x + n);
@@ -466,25 +459,44 @@ double Seconds(Clock::time_point from, Clock::time_point to) {
 
 const char* ToString(Ipopt::ApplicationReturnStatus s) {
   switch (s) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
-    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
+    case Ipopt::Solve_Succeeded:
+      return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level:
+      return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected:
+      return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small:
+      return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates:
+      return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop:
+      return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found:
+      return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded:
+      return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed:
+      return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation:
+      return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded:
+      return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom:
+      return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition:
+      return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option:
+      return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected:
+      return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception:
+      return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown:
+      return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory:
+      return "Insufficient_Memory";
+    case Ipopt::Internal_Error:
+      return "Internal_Error";
   }
   return "unknown Ipopt status";
 }
@@ -574,8 +586,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
   }
 
   // The backend's part of TemporalSolver::Solve (overrides are private: the skeleton calls it).
-  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
-                        std::vector<double>* x) override {
+  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result, std::vector<double>* x) override {
     const Clock::time_point build_start = Clock::now();
     Ipopt::SmartPtr<IpoptTemporalNlp> nlp = new IpoptTemporalNlp(d);
     std::string error;
@@ -590,8 +601,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
 
     const Clock::time_point solve_start = Clock::now();
     Ipopt::IpoptApplication& app = *app_[nonlinear ? 1 : 0];
-    const Ipopt::ApplicationReturnStatus status =
-        app.OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(nlp)));
+    const Ipopt::ApplicationReturnStatus status = app.OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(nlp)));
     result->solve_time_seconds = Seconds(solve_start, Clock::now());
     Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app.Statistics();
     if (Ipopt::IsValid(stats)) result->iterations = stats->IterationCount();
@@ -613,25 +623,24 @@ class IpoptTemporalSolver final : public TemporalSolver {
         // jerk rows are not convex, so there Ipopt's verdict is only local.
         result->status = TemporalStatus::kInfeasible;
         // The quadrotor's cones are convex, so with them (and no jerk rows) the verdict is global too.
-        result->message = !d.cubic_rows.empty()
-                              ? std::string("Ipopt: the limits cannot be met (converged to a point of local "
-                                            "infeasibility; the exact jerk rows are not convex, so ") +
-                                    internal::kLocalVerdict + ")"
-                              : !d.cone_rows.empty()
-                                    ? "Ipopt: the limits cannot be met (converged to a point of local "
-                                      "infeasibility of the linear rows and the quadrotor's convex cones)"
-                                    : "Ipopt: the limits cannot be met (converged to a point of local "
-                                      "infeasibility of the linear rows)";
+        result->message = !d.cubic_rows.empty() ? std::string(
+                                                      "Ipopt: the limits cannot be met (converged to a point of local "
+                                                      "infeasibility; the exact jerk rows are not convex, so ") +
+                                                      internal::kLocalVerdict + ")"
+                          : !d.cone_rows.empty() ? "Ipopt: the limits cannot be met (converged to a point of local "
+                                                   "infeasibility of the linear rows and the quadrotor's convex cones)"
+                                                 : "Ipopt: the limits cannot be met (converged to a point of local "
+                                                   "infeasibility of the linear rows)";
         return;
       case Ipopt::Maximum_Iterations_Exceeded:
         result->status = TemporalStatus::kIterationLimit;
-        result->message = "Ipopt: maximum number of iterations (" +
-                          std::to_string(options_.max_iterations) + ") exceeded";
+        result->message =
+            "Ipopt: maximum number of iterations (" + std::to_string(options_.max_iterations) + ") exceeded";
         return;
       case Ipopt::Maximum_CpuTime_Exceeded:
         result->status = TemporalStatus::kIterationLimit;
-        result->message = "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_in_seconds) +
-                          " s) exceeded";
+        result->message =
+            "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_in_seconds) + " s) exceeded";
         return;
       default:
         result->status = TemporalStatus::kNumericalError;

@@ -67,30 +67,23 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
   std::vector<double> StartingPoint() const;
 
   // ---- Ipopt::TNLP ----
-  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g,
-                    Ipopt::Index& nnz_h_lag, IndexStyleEnum& index_style) override;
-  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index m,
-                       Ipopt::Number* g_l, Ipopt::Number* g_u) override;
+  bool get_nlp_info(Ipopt::Index& n, Ipopt::Index& m, Ipopt::Index& nnz_jac_g, Ipopt::Index& nnz_h_lag,
+                    IndexStyleEnum& index_style) override;
+  bool get_bounds_info(Ipopt::Index n, Ipopt::Number* x_l, Ipopt::Number* x_u, Ipopt::Index m, Ipopt::Number* g_l,
+                       Ipopt::Number* g_u) override;
   bool get_constraints_linearity(Ipopt::Index m, LinearityType* const_types) override;
-  bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z,
-                          Ipopt::Number* z_L, Ipopt::Number* z_U, Ipopt::Index m,
-                          bool init_lambda, Ipopt::Number* lambda) override;
-  bool eval_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x,
-              Ipopt::Number& obj_value) override;
-  bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x,
-                   Ipopt::Number* grad_f) override;
-  bool eval_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m,
-              Ipopt::Number* g) override;
-  bool eval_jac_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m,
-                  Ipopt::Index nele_jac, Ipopt::Index* iRow, Ipopt::Index* jCol,
-                  Ipopt::Number* values) override;
-  bool eval_h(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number obj_factor,
-              Ipopt::Index m, const Ipopt::Number* lambda, bool new_lambda,
-              Ipopt::Index nele_hess, Ipopt::Index* iRow, Ipopt::Index* jCol,
-              Ipopt::Number* values) override;
-  void finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n, const Ipopt::Number* x,
-                         const Ipopt::Number* z_L, const Ipopt::Number* z_U, Ipopt::Index m,
-                         const Ipopt::Number* g, const Ipopt::Number* lambda,
+  bool get_starting_point(Ipopt::Index n, bool init_x, Ipopt::Number* x, bool init_z, Ipopt::Number* z_L,
+                          Ipopt::Number* z_U, Ipopt::Index m, bool init_lambda, Ipopt::Number* lambda) override;
+  bool eval_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number& obj_value) override;
+  bool eval_grad_f(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number* grad_f) override;
+  bool eval_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m, Ipopt::Number* g) override;
+  bool eval_jac_g(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Index m, Ipopt::Index nele_jac,
+                  Ipopt::Index* iRow, Ipopt::Index* jCol, Ipopt::Number* values) override;
+  bool eval_h(Ipopt::Index n, const Ipopt::Number* x, bool new_x, Ipopt::Number obj_factor, Ipopt::Index m,
+              const Ipopt::Number* lambda, bool new_lambda, Ipopt::Index nele_hess, Ipopt::Index* iRow,
+              Ipopt::Index* jCol, Ipopt::Number* values) override;
+  void finalize_solution(Ipopt::SolverReturn status, Ipopt::Index n, const Ipopt::Number* x, const Ipopt::Number* z_L,
+                         const Ipopt::Number* z_U, Ipopt::Index m, const Ipopt::Number* g, const Ipopt::Number* lambda,
                          Ipopt::Number obj_value, const Ipopt::IpoptData* ip_data,
                          Ipopt::IpoptCalculatedQuantities* ip_cq) override;
 
@@ -136,13 +129,13 @@ class IpoptTemporalNlp : public Ipopt::TNLP {
   // the smooth q = t^2 - ||v||^2 >= 0 (with t >= 0 from the cone's own linear row or a constant
   // t): grad q = 2 t alpha - 2 beta' v, Hessian 2 (alpha alpha' - beta' beta), constant.
   struct ConeTerms {
-    int k = 0;            // distinct free variables
+    int k = 0;  // distinct free variables
     int var[3] = {-1, -1, -1};
     double alpha[3] = {0.0, 0.0, 0.0};
     Eigen::Vector3d beta[3];
     double t0 = 0.0;
     Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
-    int jac = -1;         // its first Jacobian entry (k consecutive ones)
+    int jac = -1;                                                 // its first Jacobian entry (k consecutive ones)
     int hess[3][3] = {{-1, -1, -1}, {-1, -1, -1}, {-1, -1, -1}};  // (a, b) with var[a] >= var[b]
   };
   double ConeT(const ConeTerms& c, const Ipopt::Number* x) const {

@@ -51,12 +51,12 @@ namespace timeopt {
 namespace {
 
 using internal::BernsteinTable;
+using internal::kAxisNames;
 using internal::Multiply;
 using internal::Padded;
 using internal::RowBuilder;
 using internal::Shifted;
 using internal::SmallPoly;
-using internal::kAxisNames;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Relative tolerance for "the boundary acceleration's part across the path equals f'' sdot^2"
@@ -122,8 +122,7 @@ const SmallPoly& Basis(int j) {
   return basis[j];
 }
 const SmallPoly& BasisDerivative(int j) {
-  static const SmallPoly d[3] = {(SmallPoly(2) << -3.0, 4.0).finished(),
-                                 (SmallPoly(2) << 4.0, -8.0).finished(),
+  static const SmallPoly d[3] = {(SmallPoly(2) << -3.0, 4.0).finished(), (SmallPoly(2) << 4.0, -8.0).finished(),
                                  (SmallPoly(2) << -1.0, 4.0).finished()};
   return d[j];
 }
@@ -135,9 +134,7 @@ constexpr double kSlopeAtEnd[3] = {1.0, -4.0, 3.0};
 SmallPoly Constant(double c) { return (SmallPoly(1) << c).finished(); }
 
 // The largest |p(u)| on [0, 1] bounded by its largest Bernstein coefficient.
-double BernsteinMax(BernsteinTable& table, const SmallPoly& p) {
-  return table.Convert(p).cwiseAbs().maxCoeff();
-}
+double BernsteinMax(BernsteinTable& table, const SmallPoly& p) { return table.Convert(p).cwiseAbs().maxCoeff(); }
 
 struct JerkContext {
   const TemporalProblem& problem;
@@ -256,9 +253,8 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   // A constant s-jerk: alpha (the middle value) is b at the far end.
   c.row.Add(g0 + kRestAlpha, 1.0);
   c.row.Add(far, -1.0);
-  c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
-    return "rest cell shape in piece " + std::to_string(piece) + " cell " + std::to_string(k);
-  });
+  c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0,
+               [&] { return "rest cell shape in piece " + std::to_string(piece) + " cell " + std::to_string(k); });
   // With sigma in [0, 1] the fraction of the cell's time from rest (at the far end: 1), the cell
   // is s = s_rest +- len sigma^3 and b = b1 sigma^4, so per axis (f^(n) at s(sigma); upper signs
   // for a start, lower for an end, whose acceleration brakes while its s-jerk is still positive):
@@ -273,7 +269,7 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   const double sign = start ? 1.0 : -1.0;
   const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(piece)][0].cols()) - 1;  // of f'
   const bool exact = 3 * std::max(degree1, 0) + 3 <= internal::kMaxSmallPoly;
-  double speed_per_b = 0.0;                           // sum over axes of the velocity bounds squared
+  double speed_per_b = 0.0;                             // sum over axes of the velocity bounds squared
   Eigen::Vector3d acc_per_b = Eigen::Vector3d::Zero();  // C per axis: |acc_axis| <= C b1
   for (int a = 0; a < 3; ++a) {
     double v_per_sqrt_b, acc_bound, jerk_per_b15;
@@ -297,8 +293,7 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
       if (!(per_b > 0.0)) return;
       c.row.Add(far, per_b);
       c.row.Finish(kind, -kInf, 1.0, [&] {
-        return std::string(what) + " on axis " + kAxisNames[a] + " in the rest cell of piece " +
-               std::to_string(piece);
+        return std::string(what) + " on axis " + kAxisNames[a] + " in the rest cell of piece " + std::to_string(piece);
       });
     };
     const double vmax = limits.max_velocity(a), amax = limits.max_acceleration(a);
@@ -318,7 +313,8 @@ void AddConstantJerkRestRows(JerkContext& c, int piece, int k) {
   const auto row_le = [&](double per_b, double upper, LinearRow::Kind kind, const char* what) {
     if (!(per_b > 0.0)) return;
     c.row.Add(far, per_b);
-    c.row.Finish(kind, -kInf, upper, [&] { return std::string(what) + " in the rest cell of piece " + std::to_string(piece); });
+    c.row.Finish(kind, -kInf, upper,
+                 [&] { return std::string(what) + " in the rest cell of piece " + std::to_string(piece); });
   };
   const double g = limits.gravity;
   if (limits.max_speed) row_le(speed_per_b, *limits.max_speed * *limits.max_speed, LinearRow::Kind::kVelocity, "speed");
@@ -411,7 +407,8 @@ void AddQuadrotorCellRows(JerkContext& c, int piece, int k, const SmallPoly (&sp
   const std::vector<int> grid = {g0, g0 + 1, g0 + 2};
   std::vector<Eigen::Vector3d> coef(3);
   for (int i = 0; i < size; ++i) {
-    for (int j = 0; j < 3; ++j) coef[static_cast<size_t>(j)] = Eigen::Vector3d(bern[0][j](i), bern[1][j](i), bern[2][j](i));
+    for (int j = 0; j < 3; ++j)
+      coef[static_cast<size_t>(j)] = Eigen::Vector3d(bern[0][j](i), bern[1][j](i), bern[2][j](i));
     internal::AddQuadrotorAccelerationRows(limits, grid, coef, where, c.row, &c.d);
   }
 }
@@ -433,10 +430,10 @@ void AddQuadrotorCellRows(JerkContext& c, int piece, int k, const SmallPoly (&sp
 // beta = 0 is a constant s-jerk from rest (the only rest shape before), exact on a line; beta < 0
 // lets the s-jerk ease off as the curvature terms grow.
 struct RestPolys {
-  SmallPoly q[3];            // q per half-grid value of the cell (0 at the rest point's)
-  SmallPoly vel[3][3];       // f'^2 w^4 q: v^2, [axis][value]
-  SmallPoly acc[3][3];       // [axis][value]
-  SmallPoly jerk[3][3];      // P, [axis][value]
+  SmallPoly q[3];        // q per half-grid value of the cell (0 at the rest point's)
+  SmallPoly vel[3][3];   // f'^2 w^4 q: v^2, [axis][value]
+  SmallPoly acc[3][3];   // [axis][value]
+  SmallPoly jerk[3][3];  // P, [axis][value]
 };
 
 // RestPolys of cell k of piece i, or false when the composed polynomials do not fit a SmallPoly
@@ -654,7 +651,7 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     // Every row of one kind in a common degree, converted to Bernstein form per grid value.
     // The rows sign * polys <= bound (both signs when two_sided) on the cell's Bernstein
     // coefficients, converted once.
-    const auto emit = [&](SmallPoly (&polys)[3], bool two_sided, double bound, LinearRow::Kind kind) {
+    const auto emit = [&](SmallPoly(&polys)[3], bool two_sided, double bound, LinearRow::Kind kind) {
       int size = 0;
       for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
       size = std::max(size, 3);
@@ -676,14 +673,14 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
           }
           for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, w[j] / bound);
           c.row.Finish(kind, -kInf, 1.0, [&] {
-            return std::string("a limit on axis ") + kAxisNames[a] + " in piece " +
-                   std::to_string(piece) + " cell " + std::to_string(k);
+            return std::string("a limit on axis ") + kAxisNames[a] + " in piece " + std::to_string(piece) + " cell " +
+                   std::to_string(k);
           });
         }
       }
     };
     SmallPoly part_basis[3];
-    const auto emit_part = [&](SmallPoly (&polys)[3], double sign, double kappa, double bound) {
+    const auto emit_part = [&](SmallPoly(&polys)[3], double sign, double kappa, double bound) {
       int size = 0;
       for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
       SmallPoly bern[3];
@@ -694,8 +691,8 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
         if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;
         for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / bound);
         c.row.Finish(LinearRow::Kind::kJerk, -kInf, 1.0, [&] {
-          return std::string("jerk on axis ") + kAxisNames[a] + " in piece " + std::to_string(piece) +
-                 " cell " + std::to_string(k);
+          return std::string("jerk on axis ") + kAxisNames[a] + " in piece " + std::to_string(piece) + " cell " +
+                 std::to_string(k);
         });
       }
     };
@@ -706,7 +703,8 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, root_basis, jmax);
     if (mode == JerkRows::kNone && c.templates != nullptr) {
       int size = 0;
-      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
+      for (int j = 0; j < 3; ++j)
+        size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
       // A regular cell's rows in Bernstein form over the whole cell (the basis depends on the size
       // alone: converted once per size); a rest cell's per part, below.
       SmallPoly bern_jerk[3], rest_bernstein[3];
@@ -717,7 +715,7 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
         for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
         c.basis_size = size;
       }
-      const SmallPoly (&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
+      const SmallPoly(&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
       const int parts = rest != nullptr ? kRestJerkParts : 1;
       for (int part = 0; part < parts; ++part) {
         const double w0 = static_cast<double>(part) / parts, w1 = (part + 1.0) / parts;
@@ -805,7 +803,8 @@ bool StraightPiece(const PolynomialPiece& piece) {
   direction.normalize();
   for (Eigen::Index k = 1; k < c.cols(); ++k) {
     const Eigen::Vector3d v = c.col(k);
-    if ((v - v.dot(direction) * direction).norm() > 1e-12 * std::max(v.norm(), c.rightCols(c.cols() - 1).norm())) return false;
+    if ((v - v.dot(direction) * direction).norm() > 1e-12 * std::max(v.norm(), c.rightCols(c.cols() - 1).norm()))
+      return false;
   }
   return true;
 }
@@ -911,7 +910,8 @@ RestJerkShares RestJerkShare(const TemporalProblem& p, int piece, bool end, doub
     const Eigen::Vector3d f1 = p.curve.Evaluate(piece, s, 1), f2 = p.curve.Evaluate(piece, s, 2);
     const Eigen::Vector3d f3 = p.curve.Evaluate(piece, s, 3);
     for (int a = 0; a < 3; ++a) {
-      const double jerk = std::abs(f1(a) * 2.0 / (9.0 * h * h) + sign * f2(a) * 2.0 * sigma3 / h + f3(a) * sigma3 * sigma3);
+      const double jerk =
+          std::abs(f1(a) * 2.0 / (9.0 * h * h) + sign * f2(a) * 2.0 * sigma3 / h + f3(a) * sigma3 * sigma3);
       const double share = jerk / (*p.limits.max_jerk)(a);
       largest = std::max(largest, share);
       here = std::max(here, share);
@@ -988,7 +988,7 @@ double RampLength(const TemporalProblem& p, int piece, bool end, bool rest_to_re
 struct RestSize {
   double cell = 0.0;  // the rest cell's length in s (0: none)
   bool halved = false;
-  bool curved = false;  // a constant s-jerk over the cell keeps less than kCurvedRestShare somewhere
+  bool curved = false;   // a constant s-jerk over the cell keeps less than kCurvedRestShare somewhere
   bool braking = false;  // not a rest cell: the first cell of a braking start (BrakeCellSize)
 };
 RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_to_rest) {
@@ -996,8 +996,7 @@ RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_t
   r.cell = RampLength(p, piece, end, rest_to_rest);
   if (!(r.cell > 0.0)) return r;
   RestJerkShares shares = RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell));
-  for (int halving = 0; halving < 5 && (shares.at_rest < kRestJerkShare || shares.lowest < kRestJerkSlack);
-       ++halving) {
+  for (int halving = 0; halving < 5 && (shares.at_rest < kRestJerkShare || shares.lowest < kRestJerkSlack); ++halving) {
     r.cell *= 0.5;
     r.halved = true;
     shares = RestJerkShare(p, piece, end, std::min(r.cell, kLargestRestCell));
@@ -1019,7 +1018,8 @@ RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K) {
   RestSize r;
   const Eigen::Vector3d v = end ? p.boundary.end_velocity : p.boundary.start_velocity;
   const Eigen::Vector3d acc = end ? p.boundary.end_acceleration : p.boundary.start_acceleration;
-  const Eigen::Vector3d f1 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 1), f2 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 2);
+  const Eigen::Vector3d f1 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 1),
+                        f2 = p.curve.Evaluate(piece, end ? 1.0 : 0.0, 2);
   const double t2 = f1.squaredNorm();
   if (!(std::sqrt(t2) > p.zero_tangent_tolerance) || !(v.squaredNorm() > 0.0)) return r;
   const double b = v.squaredNorm() / t2;
@@ -1066,7 +1066,8 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
     double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
     if (rest.halved || (rest.curved && h > ds)) {
-      g.push_back(std::min({std::max(h, (rest.braking ? kSmallestBrakeCell : kSmallestRestCell) * ds), ds, kLargestRestCell}));
+      g.push_back(
+          std::min({std::max(h, (rest.braking ? kSmallestBrakeCell : kSmallestRestCell) * ds), ds, kLargestRestCell}));
       // Cells from edge e to kRestGrading e: each kRestGrading - 1 times the s already covered.
       for (double next = g.back() * (kRestGrading - 1.0); next < ds && static_cast<int>(g.size()) < K / 3;
            next *= kRestGrading) {
@@ -1135,7 +1136,8 @@ double LinearizationPoint(const double (&lb)[3], double floor) {
   const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
   if (c2 < 0.0) {
     const double u = -c1 / (2.0 * c2);
-    if (u > 0.0 && u < 1.0) b = std::max(b, lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1));
+    if (u > 0.0 && u < 1.0)
+      b = std::max(b, lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1));
   }
   return std::max(b, floor);
 }
@@ -1156,7 +1158,8 @@ void ForEachRestCell(const TemporalDiscretization& d, F f) {
 }  // namespace
 
 void RestAlphaToMiddles(const TemporalDiscretization& d, std::vector<double>* b) {
-  ForEachRestCell(d, [&](size_t alpha, size_t far) { (*b)[alpha] = TemporalProfile::RestMiddle((*b)[alpha], (*b)[far]); });
+  ForEachRestCell(d,
+                  [&](size_t alpha, size_t far) { (*b)[alpha] = TemporalProfile::RestMiddle((*b)[alpha], (*b)[far]); });
 }
 
 void RestMiddlesToAlpha(const TemporalDiscretization& d, std::vector<double>* b) {
@@ -1254,8 +1257,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     const bool rest_start = RestPoint(c, i, false), rest_end = RestPoint(c, i, true);
     if (rest_start && rest_end && K == 1) {
       if (!d.infeasible_reason) {
-        d.infeasible_reason = "piece " + std::to_string(i) +
-                              " must leave rest and reach it again within one cell: use K >= 2";
+        d.infeasible_reason =
+            "piece " + std::to_string(i) + " must leave rest and reach it again within one cell: use K >= 2";
       }
     }
     if (rest_start) d.shapes[static_cast<size_t>(i * K)] = CellShape::kRestStart;
@@ -1267,9 +1270,13 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
     const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
-    d.cell_edges[static_cast<size_t>(i)] =
-        CellEdges(K, rest_start ? RestCellSize(problem, i, false, rest_end) : i == 0 ? BrakeCellSize(problem, i, false, K) : RestSize(),
-                  rest_end ? RestCellSize(problem, i, true, rest_start) : i == m - 1 ? BrakeCellSize(problem, i, true, K) : RestSize());
+    d.cell_edges[static_cast<size_t>(i)] = CellEdges(K,
+                                                     rest_start ? RestCellSize(problem, i, false, rest_end)
+                                                     : i == 0   ? BrakeCellSize(problem, i, false, K)
+                                                                : RestSize(),
+                                                     rest_end     ? RestCellSize(problem, i, true, rest_start)
+                                                     : i == m - 1 ? BrakeCellSize(problem, i, true, K)
+                                                                  : RestSize());
     for (int k = 0; k < K; ++k) {
       const double half = 0.5 * c.Len(i, k);
       d.cells[static_cast<size_t>(2 * (i * K + k))].ds = half;
@@ -1305,9 +1312,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     for (int k = 1; k < K; ++k) {
       AddCellAcceleration(c, i, k - 1, true, c.ds);
       AddCellAcceleration(c, i, k, false, -c.ds);
-      c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
-        return "sddot continuity in piece " + std::to_string(i) + " at cell " + std::to_string(k);
-      });
+      c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0,
+                   [&] { return "sddot continuity in piece " + std::to_string(i) + " at cell " + std::to_string(k); });
     }
   }
   for (const JointInfo& j : d.joints) {
@@ -1324,9 +1330,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     AddCellAcceleration(c, j.joint + 1, 0, false, c.ds);
     AddCellAcceleration(c, j.joint, K - 1, true, -c.ds * f1b.dot(f1a) / n2);
     c.row.Add(c.Half(j.joint, 2 * K), -c.ds * f1b.dot(f2a - r2 * f2b) / n2);
-    c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
-      return "sddot continuity at joint " + std::to_string(j.joint);
-    });
+    c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0,
+                 [&] { return "sddot continuity at joint " + std::to_string(j.joint); });
   }
   AddBoundaryAcceleration(c, false);
   AddBoundaryAcceleration(c, true);

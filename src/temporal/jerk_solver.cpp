@@ -48,9 +48,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double SecondsSince(Clock::time_point from) {
-  return std::chrono::duration<double>(Clock::now() - from).count();
-}
+double SecondsSince(Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); }
 
 // Working sets. Of a convex solve's inequality rows (~60 per cell, the Bernstein coefficients of
 // every limit on every axis) only a few are near their bound at the answer, and successive solves
@@ -156,10 +154,12 @@ void BoundByPointVelocity(const TemporalProblem& problem, TemporalDiscretization
         // A rest cell's middle value is q at its rest point, not b at a point: its bound is the
         // jerk there, |f'_axis| (4 / 18) q^1.5 / L^2 <= j_axis (the other terms vanish at rest).
         const double L = edges[k + 1] - edges[k];
-        const Eigen::Vector3d t = problem.curve.Evaluate(i, shape == CellShape::kRestStart ? edges[k] : edges[k + 1], 1);
+        const Eigen::Vector3d t =
+            problem.curve.Evaluate(i, shape == CellShape::kRestStart ? edges[k] : edges[k + 1], 1);
         for (int a = 0; a < 3; ++a) {
           if (std::abs(t(a)) <= problem.zero_tangent_tolerance) continue;
-          ub = std::min(ub, std::pow(18.0 * L * L * (*problem.limits.max_jerk)(a) / (4.0 * std::abs(t(a))), 2.0 / 3.0) / v.scale);
+          ub = std::min(
+              ub, std::pow(18.0 * L * L * (*problem.limits.max_jerk)(a) / (4.0 * std::abs(t(a))), 2.0 / 3.0) / v.scale);
         }
         continue;
       }
@@ -373,7 +373,9 @@ TemporalProfile ProfileOf(const TemporalDiscretization& d, std::vector<double> b
 }
 
 // The profile's exact time for b at every half-grid value of the jerk-limited d.
-double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) { return ProfileOf(d, b).total_time(); }
+double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b) {
+  return ProfileOf(d, b).total_time();
+}
 
 // y followed by internal::kMaxRowSpan - 1 zeros, into *out (for BandedRow::PaddedValue).
 void PadForRows(const std::vector<double>& y, std::vector<double>* out) {
@@ -551,7 +553,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   // The last solve's multipliers by row id (NaN: not in it).
   std::vector<double>& z_by_id = workspace->multipliers;
   z_by_id.clear();
-  std::vector<double> padded;   // y with zeros past its end, for BandedRow::PaddedValue
+  std::vector<double> padded;  // y with zeros past its end, for BandedRow::PaddedValue
   // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
   // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
   if (jerk_aware) z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
@@ -576,7 +578,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     const double fraction = h == 0 ? kGuessFraction : kWorkingSetFraction;
     std::vector<char> loose(static_cast<size_t>(p.n), 0);
     for (int c = 0; c < p.n; ++c) {
-      loose[static_cast<size_t>(c)] = essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
+      loose[static_cast<size_t>(c)] =
+          essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
     }
     keep.assign(p.rows.size(), 0);
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
@@ -632,8 +635,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
           if (keep[r]) z_by_id[static_cast<size_t>(p.id[r])] = outcome.z[r];
         }
       }
-      const bool all = waiting == 0 &&
-                       std::count(keep.begin(), keep.end(), 1) == static_cast<std::ptrdiff_t>(keep.size());
+      const bool all =
+          waiting == 0 && std::count(keep.begin(), keep.end(), 1) == static_cast<std::ptrdiff_t>(keep.size());
       if (outcome.kind != internal::BandedIpmOutcome::Kind::kOptimal) {
         if (all) {
           // The general path decides. (Keeping an earlier answer instead, as the general path
@@ -712,7 +715,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     std::vector<double> answer = GridValues(d, outcome.x);
     // What linearizing again at this answer would gain (see PredictedGain), for the stopping
     // test below; only after a solve whose answer counts.
-    const double predicted = first_loose ? std::numeric_limits<double>::infinity() : PredictedGain(d, templates, static_rows, z_by_id, linearization, answer);
+    const double predicted = first_loose ? std::numeric_limits<double>::infinity()
+                                         : PredictedGain(d, templates, static_rows, z_by_id, linearization, answer);
     linearization = std::move(answer);
     double T = 0.0;
     try {
@@ -840,9 +844,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   // previous solve's values `previous`, only a working set of the inequality rows goes to the
   // backend (see WorkingSet); rows left out that the answer violates are added and it is solved
   // again, so the answer satisfies every row.
-  const auto solve = [&](JerkRows rows, const std::vector<double>* linearization,
-                         const std::vector<double>* previous, TemporalResult* out,
-                         std::vector<double>* grid_b, std::vector<double>* x_out) {
+  const auto solve = [&](JerkRows rows, const std::vector<double>* linearization, const std::vector<double>* previous,
+                         TemporalResult* out, std::vector<double>* grid_b, std::vector<double>* x_out) {
     const Clock::time_point start = Clock::now();
     TemporalDiscretization d;
     try {
@@ -877,7 +880,9 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     if (previous != nullptr && static_cast<int>(previous->size()) == d.num_vars && d.num_vars > 0) {
       // The first linearized solve starts from the jerk-free answer, which says nothing of where
       // the jerk rows will bind: it takes all of them.
-      const double fraction = rows == JerkRows::kNone ? kGuessFraction : settled ? kWorkingSetFraction : kUnsettledFraction;
+      const double fraction = rows == JerkRows::kNone ? kGuessFraction
+                              : settled               ? kWorkingSetFraction
+                                                      : kUnsettledFraction;
       keep = WorkingSet(d, *previous, h == 1, fraction);
     }
     build_time += SecondsSince(start);
@@ -965,7 +970,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   std::vector<double> linearization, x;
   if (jerk_rows() == JerkRows::kExact) {
     if (!solve(JerkRows::kExact, nullptr, nullptr, &first, &linearization, &x) &&
-        first.status == TemporalStatus::kInfeasible && first.message.find(internal::kLocalVerdict) != std::string::npos) {
+        first.status == TemporalStatus::kInfeasible &&
+        first.message.find(internal::kLocalVerdict) != std::string::npos) {
       // A point of local infeasibility of the exact jerk rows, which are not convex, proves
       // nothing (a line from 0.09 to 0.06 m/s at a jerk limit of 0.018 m/s^3 got this verdict, and
       // the sequential convex programme's answer holds every limit). The problem without the jerk
@@ -976,17 +982,20 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       if (solve(JerkRows::kNone, nullptr, nullptr, &relaxed, &relaxed_b, &relaxed_x)) {
         first = local;
         first.status = TemporalStatus::kNumericalError;
-        first.message = local.message + "; without the jerk limit the problem has a solution, so this is no "
+        first.message = local.message +
+                        "; without the jerk limit the problem has a solution, so this is no "
                         "proof that none exists with it";
       } else if (relaxed.status == TemporalStatus::kInfeasible) {
         first = relaxed;
-        first.message = "no profile with continuous acceleration meets the limits and the boundary states, even "
-                        "without the jerk limit (" + relaxed.message + ")";
+        first.message =
+            "no profile with continuous acceleration meets the limits and the boundary states, even "
+            "without the jerk limit (" +
+            relaxed.message + ")";
       } else {
         first = local;
         first.status = TemporalStatus::kNumericalError;
-        first.message = local.message + "; the problem without the jerk limit did not solve either (" +
-                        relaxed.message + ")";
+        first.message =
+            local.message + "; the problem without the jerk limit did not solve either (" + relaxed.message + ")";
       }
     }
     return finish(first);
@@ -1041,7 +1050,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       coarse_settings.gap_tolerance = std::max(settings.gap_tolerance, kCoarseTolerance);
       std::vector<double> coarse_first = GridValues(dc, guess);
       CapAtBrakingEnds(coarse, dc, &coarse_first);
-      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, std::move(coarse_first), coarse_settings, false, &workspace, &scp);
+      const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, std::move(coarse_first), coarse_settings,
+                                               false, &workspace, &scp);
       build_time += scp.build_seconds;
       solve_time += scp.solve_seconds;
       iterations += scp.iterations;
@@ -1094,7 +1104,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       if (!jerk_aware) first = jerk_free_start();
       if (!first.empty()) {
         StructuredScp scp;
-        bool answered = SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &workspace, &scp);
+        bool answered =
+            SolveStructuredScp(problem, d, templates, std::move(first), settings, jerk_aware, &workspace, &scp);
         if (!answered && jerk_aware) {
           // From the coarse answer it did not answer: once more from the jerk-free guess, as
           // without the coarse start, before the general path.
@@ -1104,7 +1115,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
           scp = StructuredScp();
           jerk_aware = false;
           first = jerk_free_start();
-          answered = !first.empty() && SolveStructuredScp(problem, d, templates, std::move(first), settings, false, &workspace, &scp);
+          answered = !first.empty() &&
+                     SolveStructuredScp(problem, d, templates, std::move(first), settings, false, &workspace, &scp);
         }
         build_time += scp.build_seconds;
         solve_time += scp.solve_seconds;
@@ -1132,8 +1144,10 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
   }
   if (!solve(JerkRows::kNone, nullptr, nullptr, &first, &linearization, &x)) {
     if (first.status == TemporalStatus::kInfeasible && first.message.rfind("no time", 0) == 0) {
-      first.message = "no profile with continuous acceleration meets the limits and the boundary "
-                      "states (" + first.message + ")";
+      first.message =
+          "no profile with continuous acceleration meets the limits and the boundary "
+          "states (" +
+          first.message + ")";
     }
     return finish(first);
   }
@@ -1146,8 +1160,8 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
     std::vector<double> next_b, next_x;
     if (!solve(JerkRows::kLinearized, &linearization, &x, &next, &next_b, &next_x)) {
       if (have_best) {
-        best.message = "stopped at convex solve " + std::to_string(history.size() + 1) + ": " +
-                       ToString(next.status) + ": " + next.message;
+        best.message = "stopped at convex solve " + std::to_string(history.size() + 1) + ": " + ToString(next.status) +
+                       ": " + next.message;
         stopped = next;
         break;
       }
@@ -1157,8 +1171,10 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
         // found such a case that Ipopt's exact rows solve (a polyline started at speed, K = 6).
         // Not a certificate, then, but a failure of the method, which the Ipopt fallback takes.
         next.status = TemporalStatus::kNumericalError;
-        next.message = "the first convex approximation of the jerk rows (at the jerk-free answer) has no "
-                       "solution, which does not prove the problem infeasible (" + next.message + ")";
+        next.message =
+            "the first convex approximation of the jerk rows (at the jerk-free answer) has no "
+            "solution, which does not prove the problem infeasible (" +
+            next.message + ")";
       }
       return finish(next);
     }

@@ -50,14 +50,18 @@ bool ExtremesOfX(const std::vector<Line>& lines, double* lo, double* hi) {
 bool ChainRows::Add(int v0, double c0, int v1, double c1, double h) {
   if (c1 == 0.0 || v1 == v0) {
     const double c = c0 + (v1 == v0 ? c1 : 0.0);
-    if (c > 0.0) u[static_cast<size_t>(v0)] = std::min(u[static_cast<size_t>(v0)], h / c);
-    else if (c < 0.0) l[static_cast<size_t>(v0)] = std::max(l[static_cast<size_t>(v0)], h / c);
+    if (c > 0.0)
+      u[static_cast<size_t>(v0)] = std::min(u[static_cast<size_t>(v0)], h / c);
+    else if (c < 0.0)
+      l[static_cast<size_t>(v0)] = std::max(l[static_cast<size_t>(v0)], h / c);
     return true;
   }
   if (c0 == 0.0) return Add(v1, c1, v1, 0.0, h);
   if (std::abs(v1 - v0) != 1) return false;
-  if (v0 < v1) pairs[static_cast<size_t>(v0)].push_back({c0, c1, h});
-  else pairs[static_cast<size_t>(v1)].push_back({c1, c0, h});
+  if (v0 < v1)
+    pairs[static_cast<size_t>(v0)].push_back({c0, c1, h});
+  else
+    pairs[static_cast<size_t>(v1)].push_back({c1, c0, h});
   return true;
 }
 

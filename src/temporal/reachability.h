@@ -21,7 +21,8 @@ struct ChainRows {
   std::vector<double> l, u;
   std::vector<std::vector<Pair>> pairs;  // pairs[v]: the rows over (v, v + 1)
 
-  explicit ChainRows(int n) : l(static_cast<size_t>(n), 0.0), u(static_cast<size_t>(n), kUnbounded), pairs(static_cast<size_t>(n)) {}
+  explicit ChainRows(int n)
+      : l(static_cast<size_t>(n), 0.0), u(static_cast<size_t>(n), kUnbounded), pairs(static_cast<size_t>(n)) {}
   int size() const { return static_cast<int>(l.size()); }
   // Adds c0 x_v0 + c1 x_v1 <= h (c1 = 0 and v1 = v0 for a bound); false unless |v1 - v0| <= 1.
   bool Add(int v0, double c0, int v1, double c1, double h);

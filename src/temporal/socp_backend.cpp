@@ -30,9 +30,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double Seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // An answer of the conic solver can miss a row by about 1e-6 of its bound even when it meets its
 // own tolerances: near a minimum-jerk curve's vanishing tangents b spans five orders of magnitude
@@ -74,15 +72,16 @@ bool ScaleIntoRows(const TemporalDiscretization& d, std::vector<double>* x) {
 
 conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
   if (d.infeasible_reason) {
-    throw std::invalid_argument("no SOCP to build: presolve proves the problem infeasible (" +
-                                *d.infeasible_reason + ")");
+    throw std::invalid_argument("no SOCP to build: presolve proves the problem infeasible (" + *d.infeasible_reason +
+                                ")");
   }
   if (d.num_vars == 0) {
     throw std::invalid_argument("no SOCP to build: every speed on the grid is fixed by the boundary");
   }
   if (!d.cubic_rows.empty()) {
-    throw std::invalid_argument("no SOCP to build: the discretization has exact (non-convex) jerk rows; "
-                                "the SOCP takes their linearization (JerkRows::kLinearized)");
+    throw std::invalid_argument(
+        "no SOCP to build: the discretization has exact (non-convex) jerk rows; "
+        "the SOCP takes their linearization (JerkRows::kLinearized)");
   }
   conic::ProblemBuilder builder;
   const int nx = d.num_vars;
@@ -263,8 +262,7 @@ class SocpTemporalSolver final : public TemporalSolver {
   int structured_jerk_iterations() const override {
     return options_.structured ? std::min(internal::BandedIpmSettings().max_iterations, options_.max_iterations) : 0;
   }
-  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
-                        std::vector<double>* x) override {
+  void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result, std::vector<double>* x) override {
     // The structured path first (banded_ipm.h) where it applies; the conic solver decides whenever
     // it does not end optimal.
     int banded_iterations = 0;

@@ -20,8 +20,8 @@ inline constexpr const char* kLocalVerdict = "this is a local verdict";
 // Fills total_time, objective, piece_durations, profile and the dense feasibility ratios (with a
 // jerk limit, max_jerk_ratio too) of an optimal result from the discretization's free values x.
 // May throw std::invalid_argument when the values make no profile.
-void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
-                         const std::vector<double>& x, TemporalResult* result);
+void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d, const std::vector<double>& x,
+                         TemporalResult* result);
 
 // Runs body(&finishing), a solve on one discretization, and maps what it throws to a status the one
 // way every temporal solve does: std::invalid_argument is the input's fault (kInvalidInput, its
@@ -36,8 +36,8 @@ bool MapSolveExceptions(const std::string& backend, TemporalResult* result, Body
     return body(&finishing);
   } catch (const std::invalid_argument& e) {
     result->status = finishing ? TemporalStatus::kNumericalError : TemporalStatus::kInvalidInput;
-    result->message = finishing ? backend + " backend: the solution makes no profile: " + e.what()
-                                : std::string(e.what());
+    result->message =
+        finishing ? backend + " backend: the solution makes no profile: " + e.what() : std::string(e.what());
   } catch (const std::exception& e) {
     result->status = TemporalStatus::kNumericalError;
     result->message = backend + " backend: unexpected error: " + e.what();

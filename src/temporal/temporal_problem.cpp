@@ -42,15 +42,15 @@ void CheckFinite(const Eigen::Vector3d& v, const std::string& field) {
 
 const char* ToString(ConstraintMode mode) {
   switch (mode) {
-    case ConstraintMode::kPaper: return "paper";
-    case ConstraintMode::kCertified: return "certified";
+    case ConstraintMode::kPaper:
+      return "paper";
+    case ConstraintMode::kCertified:
+      return "certified";
   }
   return "unknown";
 }
 
-bool FromString(const std::string& text, ConstraintMode* mode) {
-  return EnumFromString(text, kConstraintModes, mode);
-}
+bool FromString(const std::string& text, ConstraintMode* mode) { return EnumFromString(text, kConstraintModes, mode); }
 
 void TemporalProblem::Validate() const {
   if (curve.empty()) throw std::invalid_argument("curve: expected at least 1 piece, got 0");
@@ -66,9 +66,8 @@ void TemporalProblem::Validate() const {
     constexpr double kMaxCoefficient = 1e100;
     const double largest = c.cwiseAbs().maxCoeff();
     if (!(largest <= kMaxCoefficient)) {
-      throw std::invalid_argument("curve.pieces[" + std::to_string(i) +
-                                  "]: a coefficient's magnitude is " + Num(largest) +
-                                  " m, above the supported 1e100 m");
+      throw std::invalid_argument("curve.pieces[" + std::to_string(i) + "]: a coefficient's magnitude is " +
+                                  Num(largest) + " m, above the supported 1e100 m");
     }
   }
   // The pieces must meet (C0): a gap between them would be flown as a jump. The tolerance is
@@ -82,8 +81,7 @@ void TemporalProblem::Validate() const {
     const double gap = (curve.Evaluate(i + 1, 0.0) - curve.Evaluate(i, 1.0)).norm();
     if (!(gap <= kJointGapTolerance * std::max(1.0, size))) {
       throw std::invalid_argument("curve.pieces[" + std::to_string(i + 1) + "]: starts " + Num(gap) +
-                                  " m from where curve.pieces[" + std::to_string(i) +
-                                  "] ends (the pieces must meet)");
+                                  " m from where curve.pieces[" + std::to_string(i) + "] ends (the pieces must meet)");
     }
   }
   for (int a = 0; a < 3; ++a) {
@@ -98,7 +96,8 @@ void TemporalProblem::Validate() const {
     throw std::invalid_argument("limits.min_thrust: expected a finite number >= 0, got " + Num(*limits.min_thrust));
   }
   if (limits.max_tilt && !(*limits.max_tilt > 0.0 && *limits.max_tilt < kHalfPi)) {
-    throw std::invalid_argument("limits.max_tilt: expected an angle in (0, pi/2) radians, got " + Num(*limits.max_tilt));
+    throw std::invalid_argument("limits.max_tilt: expected an angle in (0, pi/2) radians, got " +
+                                Num(*limits.max_tilt));
   }
   if (limits.min_thrust && limits.max_thrust && *limits.min_thrust > *limits.max_thrust) {
     throw std::invalid_argument("limits.min_thrust: " + Num(*limits.min_thrust) + " is above limits.max_thrust " +
@@ -110,14 +109,16 @@ void TemporalProblem::Validate() const {
   }
   // Something must bound the speed and the acceleration on every axis, or the time has no minimum.
   if (!limits.max_speed && !limits.max_velocity.allFinite()) {
-    throw std::invalid_argument("limits: the speed is unbounded: give limits.max_velocity on every axis or "
-                                "limits.max_speed");
+    throw std::invalid_argument(
+        "limits: the speed is unbounded: give limits.max_velocity on every axis or "
+        "limits.max_speed");
   }
   // (max_tilt alone bounds the horizontal acceleration only: a climbing curve then needs max_thrust
   // as well, or the time has no minimum and the solver reports it.)
   if (!limits.max_acceleration_norm && !limits.max_thrust && !limits.max_tilt && !limits.max_acceleration.allFinite()) {
-    throw std::invalid_argument("limits: the acceleration is unbounded: give limits.max_acceleration on every "
-                                "axis, limits.max_acceleration_norm, limits.max_thrust or limits.max_tilt");
+    throw std::invalid_argument(
+        "limits: the acceleration is unbounded: give limits.max_acceleration on every "
+        "axis, limits.max_acceleration_norm, limits.max_thrust or limits.max_tilt");
   }
   if (limits.max_acceleration_change) {
     CheckPositive(*limits.max_acceleration_change, "limits.max_acceleration_change");
@@ -145,22 +146,22 @@ void TemporalProblem::Validate() const {
   }
   if (cells_per_piece > kMaxCellsPerPiece) {
     throw std::invalid_argument("discretization.K: at most " + std::to_string(kMaxCellsPerPiece) +
-                                " cells per piece, got " +
-                                std::to_string(cells_per_piece));
+                                " cells per piece, got " + std::to_string(cells_per_piece));
   }
   if (limits.max_jerk) {
     for (int a = 0; a < 3; ++a) {
       CheckPositive((*limits.max_jerk)(a), "limits.max_jerk[" + std::to_string(a) + "]");
     }
     if (rho != 0.0) {
-      throw std::invalid_argument("rho: the acceleration regularization is not supported together "
-                                  "with limits.max_jerk (a jerk limit already smooths sddot); use 0");
+      throw std::invalid_argument(
+          "rho: the acceleration regularization is not supported together "
+          "with limits.max_jerk (a jerk limit already smooths sddot); use 0");
     }
     if (limits.max_acceleration_change) {
-      throw std::invalid_argument("limits.max_acceleration_change: not used together with "
-                                  "limits.max_jerk (the jerk limit bounds the acceleration's change)");
+      throw std::invalid_argument(
+          "limits.max_acceleration_change: not used together with "
+          "limits.max_jerk (the jerk limit bounds the acceleration's change)");
     }
-
   }
   if (!(scp_tolerance > 0.0 && scp_tolerance <= 0.1)) {
     throw std::invalid_argument("scp_tolerance: expected a number in (0, 0.1], got " + Num(scp_tolerance));

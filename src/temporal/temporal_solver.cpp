@@ -25,11 +25,16 @@ TemporalSolver::~TemporalSolver() = default;
 
 const char* ToString(TemporalStatus status) {
   switch (status) {
-    case TemporalStatus::kOptimal: return "optimal";
-    case TemporalStatus::kInfeasible: return "infeasible";
-    case TemporalStatus::kIterationLimit: return "iteration_limit";
-    case TemporalStatus::kNumericalError: return "numerical_error";
-    case TemporalStatus::kInvalidInput: return "invalid_input";
+    case TemporalStatus::kOptimal:
+      return "optimal";
+    case TemporalStatus::kInfeasible:
+      return "infeasible";
+    case TemporalStatus::kIterationLimit:
+      return "iteration_limit";
+    case TemporalStatus::kNumericalError:
+      return "numerical_error";
+    case TemporalStatus::kInvalidInput:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -40,8 +45,10 @@ bool FromString(const std::string& text, TemporalStatus* status) {
 
 const char* ToString(TemporalBackend backend) {
   switch (backend) {
-    case TemporalBackend::kSocp: return "socp";
-    case TemporalBackend::kIpopt: return "ipopt";
+    case TemporalBackend::kSocp:
+      return "socp";
+    case TemporalBackend::kIpopt:
+      return "ipopt";
   }
   return "unknown";
 }
@@ -177,14 +184,13 @@ TemporalResult SolveInUnits(const TemporalProblem& problem, const Solve& solve, 
 
 // The checks both backends' options share: a positive finite tolerance and an iteration limit of
 // at least `min_iterations`.
-bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations,
-                        std::string* error) {
+bool ValidSolverOptions(double tolerance, int max_iterations, int min_iterations, std::string* error) {
   if (!std::isfinite(tolerance) || !(tolerance > 0.0)) {
     return internal::FailOption(error, "tolerance", "a positive finite number", tolerance);
   }
   if (max_iterations < min_iterations) {
-    return internal::FailOption(error, "max_iterations",
-                                "an integer >= " + std::to_string(min_iterations), max_iterations);
+    return internal::FailOption(error, "max_iterations", "an integer >= " + std::to_string(min_iterations),
+                                max_iterations);
   }
   return true;
 }
@@ -208,7 +214,8 @@ bool SocpTemporalOptions::IsValid(std::string* error) const {
   }
   if (!(jerk_ipopt_fallback_seconds >= 0.0)) {
     if (error) {
-      *error = "jerk_ipopt_fallback_seconds: expected a number >= 0, got " + std::to_string(jerk_ipopt_fallback_seconds);
+      *error =
+          "jerk_ipopt_fallback_seconds: expected a number >= 0, got " + std::to_string(jerk_ipopt_fallback_seconds);
     }
     return false;
   }
@@ -218,7 +225,9 @@ bool SocpTemporalOptions::IsValid(std::string* error) const {
 bool IpoptTemporalOptions::IsValid(std::string* error) const {
   if (!ValidSolverOptions(tolerance, max_iterations, 0, error)) return false;
   if (!(max_solve_time_in_seconds > 0.0)) {
-    if (error) *error = "max_solve_time_in_seconds: expected a positive number, got " + std::to_string(max_solve_time_in_seconds);
+    if (error)
+      *error =
+          "max_solve_time_in_seconds: expected a positive number, got " + std::to_string(max_solve_time_in_seconds);
     return false;
   }
   return true;
@@ -232,7 +241,7 @@ std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend b
   constexpr double kIpoptCellBytes = 5e3, kIpoptJerkCellBytes = 1e6;
   const bool jerk = problem.limits.max_jerk.has_value();
   const double per_cell = backend == TemporalBackend::kSocp ? (jerk ? kSocpJerkCellBytes : kSocpCellBytes)
-                                                           : (jerk ? kIpoptJerkCellBytes : kIpoptCellBytes);
+                                                            : (jerk ? kIpoptJerkCellBytes : kIpoptCellBytes);
   const double cells = static_cast<double>(problem.curve.num_pieces()) * std::max(problem.cells_per_piece, 0);
   const double bytes = kProcessBytes + cells * per_cell;
   return bytes < 9e18 ? static_cast<std::int64_t>(bytes) : std::numeric_limits<std::int64_t>::max();
@@ -240,8 +249,10 @@ std::int64_t TemporalPeakBytes(const TemporalProblem& problem, TemporalBackend b
 
 std::unique_ptr<TemporalSolver> MakeTemporalSolver(TemporalBackend backend) {
   switch (backend) {
-    case TemporalBackend::kSocp: return MakeSocpTemporalSolver();
-    case TemporalBackend::kIpopt: return MakeIpoptTemporalSolver();
+    case TemporalBackend::kSocp:
+      return MakeSocpTemporalSolver();
+    case TemporalBackend::kIpopt:
+      return MakeIpoptTemporalSolver();
   }
   throw std::invalid_argument("MakeTemporalSolver: unknown backend");
 }
@@ -270,14 +281,13 @@ std::unique_ptr<TemporalSolver> MakeBudgetedTemporalSolver(TemporalBackend backe
   return MakeIpoptTemporalSolver(options);
 }
 
-
 namespace {
 
 // The dense feasibility check: largest |v_axis|/vmax_axis, |acc_axis|/amax_axis and (with a jerk
 // limit) |jerk_axis|/jmax_axis along the exact trajectory, sampling every cell at
 // `samples_per_cell` + 1 evenly spaced values of s.
-void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile,
-                      int samples_per_cell, TemporalResult* result) {
+void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& profile, int samples_per_cell,
+                      TemporalResult* result) {
   if (samples_per_cell < 1) throw std::invalid_argument("DenseLimitRatios: samples_per_cell < 1");
   double vr = 0.0, ar = 0.0, jr = 0.0;
   const int K = profile.cells_per_piece();
@@ -290,7 +300,8 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   // The quadrotor's limits at one sample (velocity, acceleration).
   const TemporalLimits& L = problem.limits;
   const bool norms = L.HasNormLimits();
-  double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, thrust_min = std::numeric_limits<double>::infinity(), tilt = 0.0;
+  double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, thrust_min = std::numeric_limits<double>::infinity(),
+         tilt = 0.0;
   const auto quad = [&](const Eigen::Vector3d& vel, const Eigen::Vector3d& acc) {
     speed = std::max(speed, vel.norm());
     acc_norm = std::max(acc_norm, acc.norm());
@@ -348,7 +359,8 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   if (L.max_speed) result->max_speed_ratio = speed / *L.max_speed;
   if (L.max_acceleration_norm) result->max_acceleration_norm_ratio = acc_norm / *L.max_acceleration_norm;
   if (L.max_thrust) result->max_thrust_ratio = thrust_max / *L.max_thrust;
-  if (L.min_thrust) result->min_thrust_ratio = thrust_min > 0.0 ? *L.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
+  if (L.min_thrust)
+    result->min_thrust_ratio = thrust_min > 0.0 ? *L.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
   if (L.max_tilt) result->max_tilt_ratio = tilt / *L.max_tilt;
   result->max_jerk_ratio = jr;
 }
@@ -359,8 +371,8 @@ namespace internal {
 
 // Fills total_time, objective, piece_durations, profile and the dense feasibility ratios of an
 // optimal result from the discretization's free values x (the skeleton's finishing step).
-void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d,
-                         const std::vector<double>& x, TemporalResult* result) {
+void FinishOptimalResult(const TemporalProblem& problem, const TemporalDiscretization& d, const std::vector<double>& x,
+                         TemporalResult* result) {
   const int K = d.cells_per_piece;  // half cells in the jerk-limited mode
   // b at every grid value (interior-point iterates may sit a rounding error below zero); a
   // jerk-limited rest cell's middle value is q at its rest point in d, b at its middle in the profile.
@@ -411,9 +423,9 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
                      "), but a rest-to-rest problem whose limits allow hovering always has one (the "
                      "same path, slowly enough): a numerical failure";
   }
-  const bool fallback = problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ &&
-                        (result.status == TemporalStatus::kNumericalError ||
-                         result.status == TemporalStatus::kIterationLimit);
+  const bool fallback =
+      problem.limits.max_jerk && jerk_ipopt_fallback_seconds() > 0.0 && !probing_start_ &&
+      (result.status == TemporalStatus::kNumericalError || result.status == TemporalStatus::kIterationLimit);
   const std::int64_t fallback_bytes = fallback ? TemporalPeakBytes(problem, TemporalBackend::kIpopt) : 0;
   const bool fallback_fits = jerk_ipopt_fallback_memory() <= 0 || fallback_bytes <= jerk_ipopt_fallback_memory();
   if (fallback && !fallback_fits) {
@@ -444,11 +456,10 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   // Rows that make no chain along the path (a jerk limit, lambda_a, the quadrotor's cones): the
   // nearest start state is found by bisection (RelaxStartState); a jerk-limited numerical failure
   // too. (With cones relax_boundary was silently ignored: the chain's reachability cannot run.)
-  const bool scale_start = problem.relax_boundary &&
-                           (problem.limits.max_jerk || problem.limits.max_acceleration_change ||
-                            problem.limits.HasNormLimits()) &&
-                           (problem.boundary.start_velocity.squaredNorm() > 0.0 ||
-                            problem.boundary.start_acceleration.squaredNorm() > 0.0);
+  const bool scale_start =
+      problem.relax_boundary &&
+      (problem.limits.max_jerk || problem.limits.max_acceleration_change || problem.limits.HasNormLimits()) &&
+      (problem.boundary.start_velocity.squaredNorm() > 0.0 || problem.boundary.start_acceleration.squaredNorm() > 0.0);
   if (scale_start && problem.limits.max_jerk && result.status == TemporalStatus::kNumericalError) {
     return RelaxStartState(problem, std::move(result));
   }
@@ -472,7 +483,8 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
     relaxation.start_speed = closest.boundary.start_velocity.norm();
     relaxation.end_speed_given = problem.boundary.end_velocity.norm();
     relaxation.end_speed = closest.boundary.end_velocity.norm();
-    relaxation.start_scale = relaxation.start_speed_given > 0.0 ? relaxation.start_speed / relaxation.start_speed_given : 1.0;
+    relaxation.start_scale =
+        relaxation.start_speed_given > 0.0 ? relaxation.start_speed / relaxation.start_speed_given : 1.0;
     answer.boundary_relaxation = relaxation;
     answer.infeasibility = result.infeasibility;  // why the given boundaries could not be flown
     answer.message = "boundary relaxed: " + result.infeasibility->detail;
@@ -512,8 +524,9 @@ TemporalResult TemporalSolver::RelaxStartState(const TemporalProblem& problem, T
     for (double lambda = kStartScaleFirstGuess; infeasible - feasible > kStartScaleTolerance;
          lambda = 0.5 * (feasible + infeasible)) {
       scaled.boundary.start_velocity = lambda * v0;
-      scaled.boundary.start_acceleration = keep_braking ? Eigen::Vector3d(lambda * lambda * (a0 - tangential) + tangential)
-                                                        : Eigen::Vector3d(lambda * lambda * a0);
+      scaled.boundary.start_acceleration = keep_braking
+                                               ? Eigen::Vector3d(lambda * lambda * (a0 - tangential) + tangential)
+                                               : Eigen::Vector3d(lambda * lambda * a0);
       TemporalResult attempt = Solve(scaled);
       build += attempt.build_time_seconds;
       solve += attempt.solve_time_seconds;
@@ -619,6 +632,5 @@ TemporalResult TemporalSolver::SolvePaperOrCertified(const TemporalProblem& prob
   });
   return result;
 }
-
 
 }  // namespace timeopt

@@ -201,7 +201,9 @@ class Fitter {
     std::vector<CellBounds> bounds(static_cast<size_t>(cells));
     for (int c = 0; c < cells; ++c) bounds[static_cast<size_t>(c)] = BoundCell(trajectory_, c / K, c % K);
     // The state at the start of cell c (its own right limit) and at the end of cell c (its left one).
-    const auto first_state = [&](int c) { return trajectory_.AtPoint(profile_.InCell(c / K, c % K, 0.0), start_of(c)); };
+    const auto first_state = [&](int c) {
+      return trajectory_.AtPoint(profile_.InCell(c / K, c % K, 0.0), start_of(c));
+    };
     const auto last_state = [&](int c) {
       return trajectory_.AtPoint(profile_.InCell(c / K, c % K, profile_.CellLength(c / K, c % K)), end_of(c));
     };
@@ -241,7 +243,8 @@ class Fitter {
       int covered = 1;
       for (int span = 1; span <= run; span *= 2) {
         for (; covered < span; ++covered) {
-          span_bounds.acceleration = span_bounds.acceleration.cwiseMax(bounds[static_cast<size_t>(c + covered)].acceleration);
+          span_bounds.acceleration =
+              span_bounds.acceleration.cwiseMax(bounds[static_cast<size_t>(c + covered)].acceleration);
           span_bounds.jerk = span_bounds.jerk.cwiseMax(bounds[static_cast<size_t>(c + covered)].jerk);
         }
         const TrajectoryState x1 = last_state(c + span - 1);
@@ -269,8 +272,8 @@ class Fitter {
  private:
   void Accept(PolynomialSegment segment, const Checked& checked) {
     if (static_cast<int>(out_.segments.size()) >= options_.max_segments) {
-      throw std::invalid_argument("polynomial segments: more than max_segments (" + std::to_string(options_.max_segments) +
-                                  ") segments needed for these tolerances");
+      throw std::invalid_argument("polynomial segments: more than max_segments (" +
+                                  std::to_string(options_.max_segments) + ") segments needed for these tolerances");
     }
     out_.degree = std::max(out_.degree, static_cast<int>(segment.coefficients.cols()) - 1);
     out_.max_position_error = std::max(out_.max_position_error, checked.position);
@@ -321,7 +324,8 @@ class Fitter {
     const auto spacing_for = [&](double curvature, double tolerance) {
       return curvature > 0.0 ? std::sqrt(8.0 * kCurvatureShare * tolerance / curvature) : h;
     };
-    const double spacing_a = s_velocity.norm() > 0.0 ? 2.0 * kCurvatureShare * options_.max_acceleration_error / s_velocity.norm() : h;
+    const double spacing_a =
+        s_velocity.norm() > 0.0 ? 2.0 * kCurvatureShare * options_.max_acceleration_error / s_velocity.norm() : h;
     const double finest = std::min({spacing_for(s_position.norm(), options_.max_position_error),
                                     spacing_for(s_velocity.norm(), options_.max_velocity_error), spacing_a});
     count = std::max(count, std::ceil(h / finest));
@@ -340,7 +344,8 @@ class Fitter {
       throw std::invalid_argument(message.str());
     }
     const double gap = h / n;
-    Eigen::Vector3d prev_p = Eigen::Vector3d::Zero(), prev_v = Eigen::Vector3d::Zero(), prev_a = Eigen::Vector3d::Zero();
+    Eigen::Vector3d prev_p = Eigen::Vector3d::Zero(), prev_v = Eigen::Vector3d::Zero(),
+                    prev_a = Eigen::Vector3d::Zero();
     const Eigen::Vector3d slack_p = s_position * (gap * gap / 8.0), slack_v = s_velocity * (gap * gap / 8.0);
     const Eigen::Vector3d slack_a = s_velocity * (gap / 2.0);
     for (int j = 0; j <= n; ++j) {

@@ -12,17 +12,19 @@ namespace timeopt {
 
 const char* ToString(CellShape shape) {
   switch (shape) {
-    case CellShape::kLinear: return "linear";
-    case CellShape::kQuadratic: return "quadratic";
-    case CellShape::kRestStart: return "rest_start";
-    case CellShape::kRestEnd: return "rest_end";
+    case CellShape::kLinear:
+      return "linear";
+    case CellShape::kQuadratic:
+      return "quadratic";
+    case CellShape::kRestStart:
+      return "rest_start";
+    case CellShape::kRestEnd:
+      return "rest_end";
   }
   return "unknown";
 }
 
-bool FromString(const std::string& text, CellShape* shape) {
-  return EnumFromString(text, kCellShapes, shape);
-}
+bool FromString(const std::string& text, CellShape* shape) { return EnumFromString(text, kCellShapes, shape); }
 
 namespace {
 
@@ -89,9 +91,7 @@ struct QuadraticCell {
     const double back = sigma - h;  // exact for sigma in [h/2, h] (Sterbenz)
     return std::max(0.0, b1 + back * (d1 + c2 * back));
   }
-  double Slope(double sigma) const {
-    return sigma <= 0.5 * h ? c1 + 2.0 * c2 * sigma : d1 + 2.0 * c2 * (sigma - h);
-  }
+  double Slope(double sigma) const { return sigma <= 0.5 * h ? c1 + 2.0 * c2 * sigma : d1 + 2.0 * c2 * (sigma - h); }
 
   // b at the extremum of b when b' changes sign strictly inside the cell (c1 and d1 of opposite
   // signs), from the end with the smaller slope (less cancellation in b - b'^2 / (4 c2)); NaN when
@@ -206,9 +206,7 @@ struct RestCell {
 // w^4 at a rest cell's middle in s (w^3 = 1/2).
 constexpr double kMiddleW4 = RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW;
 
-std::string CellName(size_t piece, int k) {
-  return "cell " + std::to_string(k) + " of piece " + std::to_string(piece);
-}
+std::string CellName(size_t piece, int k) { return "cell " + std::to_string(k) + " of piece " + std::to_string(piece); }
 
 }  // namespace
 
@@ -223,21 +221,19 @@ TemporalProfile::TemporalProfile(std::vector<std::vector<double>> b) : b_(std::m
   for (size_t i = 0; i < b_.size(); ++i) {
     if (b_[i].size() != points) {
       throw std::invalid_argument("TemporalProfile: piece " + std::to_string(i) + " has " +
-                                  std::to_string(b_[i].size()) + " grid values, expected " +
-                                  std::to_string(points));
+                                  std::to_string(b_[i].size()) + " grid values, expected " + std::to_string(points));
     }
     for (size_t k = 0; k < points; ++k) {
       if (!(b_[i][k] >= 0.0) || !std::isfinite(b_[i][k])) {
-        throw std::invalid_argument("TemporalProfile: b of piece " + std::to_string(i) +
-                                    " at grid point " + std::to_string(k) +
-                                    " must be finite and >= 0");
+        throw std::invalid_argument("TemporalProfile: b of piece " + std::to_string(i) + " at grid point " +
+                                    std::to_string(k) + " must be finite and >= 0");
       }
     }
     for (int k = 0; k < cells_per_piece_; ++k) {
       const double root = std::sqrt(b_[i][k]) + std::sqrt(b_[i][k + 1]);
       if (!(root > 0.0)) {
-        throw std::invalid_argument("TemporalProfile: cell " + std::to_string(k) + " of piece " +
-                                    std::to_string(i) + " has zero speed at both ends");
+        throw std::invalid_argument("TemporalProfile: cell " + std::to_string(k) + " of piece " + std::to_string(i) +
+                                    " has zero speed at both ends");
       }
       cell_start_.push_back(cell_start_.back() + 2.0 * ds / root);
     }
@@ -284,21 +280,20 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
   const std::string where = "TemporalProfile::JerkLimited: ";
   if (half_b.empty()) throw std::invalid_argument(where + "expected at least 1 piece");
   if (shapes.size() != half_b.size()) {
-    throw std::invalid_argument(where + "expected shapes for " + std::to_string(half_b.size()) +
-                                " pieces, got " + std::to_string(shapes.size()));
+    throw std::invalid_argument(where + "expected shapes for " + std::to_string(half_b.size()) + " pieces, got " +
+                                std::to_string(shapes.size()));
   }
   const size_t points = half_b.front().size();
   if (points < 3 || points % 2 == 0) {
-    throw std::invalid_argument(where + "expected 2K + 1 half-grid values with K >= 1, got " +
-                                std::to_string(points));
+    throw std::invalid_argument(where + "expected 2K + 1 half-grid values with K >= 1, got " + std::to_string(points));
   }
   TemporalProfile p;
   p.cells_per_piece_ = static_cast<int>(points / 2);
   const int K = p.cells_per_piece_;
   if (!cell_edges.empty()) {
     if (cell_edges.size() != half_b.size()) {
-      throw std::invalid_argument(where + "expected cell edges for " + std::to_string(half_b.size()) +
-                                  " pieces, got " + std::to_string(cell_edges.size()));
+      throw std::invalid_argument(where + "expected cell edges for " + std::to_string(half_b.size()) + " pieces, got " +
+                                  std::to_string(cell_edges.size()));
     }
     for (size_t i = 0; i < cell_edges.size(); ++i) {
       const std::vector<double>& e = cell_edges[i];
@@ -316,20 +311,17 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
   for (size_t i = 0; i < half_b.size(); ++i) {
     std::vector<double>& h = half_b[i];
     if (h.size() != points) {
-      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " +
-                                  std::to_string(h.size()) + " half-grid values, expected " +
-                                  std::to_string(points));
+      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " + std::to_string(h.size()) +
+                                  " half-grid values, expected " + std::to_string(points));
     }
     if (shapes[i].size() != static_cast<size_t>(K)) {
-      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " +
-                                  std::to_string(shapes[i].size()) + " cell shapes, expected " +
-                                  std::to_string(K));
+      throw std::invalid_argument(where + "piece " + std::to_string(i) + " has " + std::to_string(shapes[i].size()) +
+                                  " cell shapes, expected " + std::to_string(K));
     }
     for (size_t j = 0; j < points; ++j) {
       if (!(h[j] >= 0.0) || !std::isfinite(h[j])) {
-        throw std::invalid_argument(where + "b of piece " + std::to_string(i) + " at half point " +
-                                    std::to_string(j) + " (cell " +
-                                    std::to_string(std::min<size_t>(j / 2, K - 1)) +
+        throw std::invalid_argument(where + "b of piece " + std::to_string(i) + " at half point " + std::to_string(j) +
+                                    " (cell " + std::to_string(std::min<size_t>(j / 2, K - 1)) +
                                     ") must be finite and >= 0");
       }
     }
@@ -363,8 +355,7 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
         case CellShape::kQuadratic: {
           const QuadraticCell cell(b0, h[2 * k + 1], b1, ds);
           if (cell.VertexValue() < 0.0) {
-            throw std::invalid_argument(where + CellName(i, k) +
-                                        ": the quadratic b = sdot^2 drops below 0 inside");
+            throw std::invalid_argument(where + CellName(i, k) + ": the quadratic b = sdot^2 drops below 0 inside");
           }
           duration = cell.Time(ds);
           if (!std::isfinite(duration) || !(duration > 0.0)) {
@@ -446,9 +437,7 @@ double TemporalProfile::TimeInCell(int piece, int k, double sigma) const {
       return 2.0 * sigma / (std::sqrt(b0) + std::sqrt(b_sigma));
     }
     case CellShape::kQuadratic:
-      return QuadraticCell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
-                           half_b_[piece][2 * k + 2], ds)
-          .Time(sigma);
+      return QuadraticCell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1], half_b_[piece][2 * k + 2], ds).Time(sigma);
     case CellShape::kRestStart:
       return RestCell(half_b_[piece][2 * k + 1], b_[piece][k + 1], ds).TimeTo(std::cbrt(std::min(sigma / ds, 1.0)));
     case CellShape::kRestEnd: {
@@ -473,8 +462,7 @@ TemporalProfile::Point TemporalProfile::StateInCell(int piece, int k, double sig
       p.sdot = std::sqrt(std::max(0.0, b_[piece][k] + 2.0 * p.sddot * sigma));
       break;
     case CellShape::kQuadratic: {
-      const QuadraticCell cell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
-                               half_b_[piece][2 * k + 2], ds);
+      const QuadraticCell cell(half_b_[piece][2 * k], half_b_[piece][2 * k + 1], half_b_[piece][2 * k + 2], ds);
       p.sdot = std::sqrt(cell.B(sigma));
       p.sddot = 0.5 * cell.Slope(sigma);
       p.sdddot = cell.c2 * p.sdot;
@@ -552,8 +540,7 @@ TemporalProfile::Point TemporalProfile::AtTime(double t) const {
       return p;
     }
     case CellShape::kQuadratic: {
-      const QuadraticCell q(half_b_[piece][2 * k], half_b_[piece][2 * k + 1],
-                            half_b_[piece][2 * k + 2], ds);
+      const QuadraticCell q(half_b_[piece][2 * k], half_b_[piece][2 * k + 1], half_b_[piece][2 * k + 2], ds);
       // The cell's own time, not the difference of the cumulative sums, so that tau = duration
       // lands on sigma = ds.
       return StateInCell(piece, k, q.Sigma(tau, q.Time(ds)));

@@ -11,8 +11,7 @@ Trajectory::Trajectory(PiecewiseCurve curve, TemporalProfile profile)
     : curve_(std::move(curve)), profile_(std::move(profile)) {
   if (curve_.num_pieces() != profile_.num_pieces()) {
     throw std::invalid_argument("Trajectory: the curve has " + std::to_string(curve_.num_pieces()) +
-                                " pieces but the profile has " +
-                                std::to_string(profile_.num_pieces()));
+                                " pieces but the profile has " + std::to_string(profile_.num_pieces()));
   }
 }
 

@@ -12,9 +12,12 @@ namespace timeopt {
 
 const char* ToString(YawMode mode) {
   switch (mode) {
-    case YawMode::kFixed: return "fixed";
-    case YawMode::kVelocity: return "velocity";
-    case YawMode::kGoal: return "goal";
+    case YawMode::kFixed:
+      return "fixed";
+    case YawMode::kVelocity:
+      return "velocity";
+    case YawMode::kGoal:
+      return "goal";
   }
   return "unknown";
 }
@@ -109,8 +112,10 @@ YawProfile PlanYaw(const Trajectory& trajectory, const std::vector<double>& time
   for (size_t i = 0; i < n && !held; ++i) held = target[i];
   if (!held) return out;  // nothing defines a heading: fixed_yaw throughout
   for (size_t i = 0; i < n; ++i) {
-    if (target[i]) held = target[i];
-    else target[i] = held;
+    if (target[i])
+      held = target[i];
+    else
+      target[i] = held;
   }
   // Followed causally within the rate limit, the short way round; the start faces its target.
   out.yaw[0] = *target[0];

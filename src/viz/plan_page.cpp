@@ -24,7 +24,8 @@ std::string Library(const char* path, const char* package) {
                     " (scripts/install_deps.sh main)");
   }
   // Inside <script>, a "</script" would end the element.
-  for (size_t at = text.find("</script"); at != std::string::npos; at = text.find("</script", at)) text.replace(at, 2, "<\\/");
+  for (size_t at = text.find("</script"); at != std::string::npos; at = text.find("</script", at))
+    text.replace(at, 2, "<\\/");
   return text;
 }
 
@@ -33,10 +34,18 @@ std::string Quoted(const std::string& text) {
   std::string out = "\"";
   for (const char c : text) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '<': out += "\\u003c"; break;
-      case '\n': out += "\\n"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '<':
+        out += "\\u003c";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buffer[8];
@@ -343,8 +352,10 @@ std::string PlanPageHtml(const Trajectory& trajectory, const VehicleLimits& limi
     std::vector<Eigen::Vector3d> path;
     for (const TrajectoryState& s : samples) path.push_back(s.position);
     // The voxels near the path, thinned evenly to max_voxels.
-    const std::vector<Eigen::Vector3d> all = OccupiedVoxelsNear(*map, path, options.voxel_radius, 4 * options.max_voxels);
-    const size_t stride = std::max<size_t>(1, (all.size() + options.max_voxels - 1) / std::max<size_t>(options.max_voxels, 1));
+    const std::vector<Eigen::Vector3d> all =
+        OccupiedVoxelsNear(*map, path, options.voxel_radius, 4 * options.max_voxels);
+    const size_t stride =
+        std::max<size_t>(1, (all.size() + options.max_voxels - 1) / std::max<size_t>(options.max_voxels, 1));
     const double res = map->resolution();
     size_t count = 0;
     std::string index;
@@ -359,8 +370,10 @@ std::string PlanPageHtml(const Trajectory& trajectory, const VehicleLimits& limi
     data += ", \"count\": " + std::to_string(count) + ", \"index\": [" + index + "]}";
     char radius[32];
     std::snprintf(radius, sizeof(radius), "%.3g", options.voxel_radius);
-    summary.emplace_back("voxels", std::to_string(count) + " occupied within " + radius + " m of the path" +
-                                       (stride > 1 ? " (every " + std::to_string(stride) + "th of " + std::to_string(all.size()) + ")" : ""));
+    summary.emplace_back(
+        "voxels",
+        std::to_string(count) + " occupied within " + radius + " m of the path" +
+            (stride > 1 ? " (every " + std::to_string(stride) + "th of " + std::to_string(all.size()) + ")" : ""));
   }
   data += ", \"summary\": [";
   for (size_t i = 0; i < summary.size(); ++i) {
@@ -368,12 +381,14 @@ std::string PlanPageHtml(const Trajectory& trajectory, const VehicleLimits& limi
   }
   data += "]};";
   std::string page = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>";
-  for (const char c : options.title) page += c == '<' ? std::string("&lt;") : c == '&' ? std::string("&amp;") : std::string(1, c);
+  for (const char c : options.title)
+    page += c == '<' ? std::string("&lt;") : c == '&' ? std::string("&amp;") : std::string(1, c);
   page += "</title>\n<style>" + std::string(kStyle) + "</style>\n";
   page += "<script>" + three + "</script>\n<script>" + orbit + "</script>\n<script>" + chart + "</script>\n</head>\n";
   page += kBody;
   page += "<script>" + data + "</script>\n<script>" + std::string(kApp) + "</script>\n</body></html>\n";
-  if (page.size() > kMaxPlanPageBytes) throw std::logic_error("3D page: " + std::to_string(page.size()) + " bytes, above the cap");
+  if (page.size() > kMaxPlanPageBytes)
+    throw std::logic_error("3D page: " + std::to_string(page.size()) + " bytes, above the cap");
   return page;
 }
 

@@ -46,15 +46,13 @@ void WritePlanPng(const Esdf& esdf, const Trajectory& trajectory, const std::str
     height /= static_cast<double>(samples.size());
   }
   const double r = esdf.resolution();
-  const internal::SliceImage image(esdf, height, options.pixels_per_voxel, options.max_image_size,
-                                   360);
+  const internal::SliceImage image(esdf, height, options.pixels_per_voxel, options.max_image_size, 360);
   const int ppv = image.pixels_per_voxel(), map_h = image.map_height();
   cairo_t* c = image.context();
 
   // Map slice: obstacles black, free space from grey (at the surface) to white (>= 2 m away).
   image.FillVoxels([&](int x, int y) {
-    const Eigen::Vector3d p((esdf.box().min.x() + x + 0.5) * r, (esdf.box().min.y() + y + 0.5) * r,
-                            height);
+    const Eigen::Vector3d p((esdf.box().min.x() + x + 0.5) * r, (esdf.box().min.y() + y + 0.5) * r, height);
     const double d = esdf.Distance(p);
     const double shade = d < 0.0 ? 0.0 : 0.6 + 0.4 * std::min(d / 2.0, 1.0);
     return internal::Rgb{shade, shade, shade};

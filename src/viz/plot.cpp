@@ -44,16 +44,14 @@ void Text(cairo_t* cr, double x, double y, const std::string& s, double align_x,
 
 }  // namespace
 
-void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path, int width,
-                  int panel_height) {
+void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path, int width, int panel_height) {
   if (panels.empty()) throw std::invalid_argument("WritePlotPng: no panel");
   if (width < 200 || panel_height < 100) throw std::invalid_argument("WritePlotPng: image too small");
   for (const auto& p : panels) {
     for (const auto& s : p.series) {
       if (s.x.size() != s.y.size()) {
-        throw std::invalid_argument("WritePlotPng: series '" + s.label + "' has " +
-                                    std::to_string(s.x.size()) + " x values and " +
-                                    std::to_string(s.y.size()) + " y values");
+        throw std::invalid_argument("WritePlotPng: series '" + s.label + "' has " + std::to_string(s.x.size()) +
+                                    " x values and " + std::to_string(s.y.size()) + " y values");
       }
     }
   }
@@ -85,9 +83,20 @@ void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path,
         ymax = std::max(ymax, ty(s.y[i]));
       }
     }
-    if (!std::isfinite(xmin)) { xmin = 0; xmax = 1; ymin = 0; ymax = 1; }
-    if (xmax - xmin <= 0) { xmin -= 0.5; xmax += 0.5; }
-    if (ymax - ymin <= 0) { ymin -= 0.5; ymax += 0.5; }
+    if (!std::isfinite(xmin)) {
+      xmin = 0;
+      xmax = 1;
+      ymin = 0;
+      ymax = 1;
+    }
+    if (xmax - xmin <= 0) {
+      xmin -= 0.5;
+      xmax += 0.5;
+    }
+    if (ymax - ymin <= 0) {
+      ymin -= 0.5;
+      ymax += 0.5;
+    }
     const double pad = 0.06 * (ymax - ymin);
     ymin -= pad;
     ymax += pad;
@@ -137,8 +146,10 @@ void WritePlotPng(const std::vector<PlotPanel>& panels, const std::string& path,
           pen = false;
           continue;
         }
-        if (pen) cairo_line_to(cr, X(s.x[i]), Y(s.y[i]));
-        else cairo_move_to(cr, X(s.x[i]), Y(s.y[i]));
+        if (pen)
+          cairo_line_to(cr, X(s.x[i]), Y(s.y[i]));
+        else
+          cairo_move_to(cr, X(s.x[i]), Y(s.y[i]));
         pen = true;
       }
       cairo_stroke(cr);

@@ -6,8 +6,8 @@
 
 namespace timeopt {
 
-void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits,
-                         const std::string& path, int samples) {
+void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits, const std::string& path,
+                         int samples) {
   if (samples < 2) throw std::invalid_argument("WriteProfilePlotPng: samples must be >= 2");
   const double T = trajectory.duration();
   std::vector<double> t(static_cast<size_t>(samples)), speed(t.size());
@@ -27,8 +27,7 @@ void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limi
   }
   const std::array<double, 3> colors[3] = {{0.85, 0.2, 0.15}, {0.15, 0.6, 0.2}, {0.15, 0.3, 0.85}};
   const char* names[3] = {"x", "y", "z"};
-  const auto limit_series = [&](double value, const std::string& label,
-                                const std::array<double, 3>& rgb) {
+  const auto limit_series = [&](double value, const std::string& label, const std::array<double, 3>& rgb) {
     return PlotSeries{label, {0.0, T}, {value, value}, rgb, true};
   };
 
@@ -52,8 +51,7 @@ void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limi
       vel_panel.series.push_back(limit_series(-limits.max_velocity(axis), "", rgb));
     }
     if (!same_a && std::isfinite(limits.max_acceleration(axis))) {
-      const auto rgb =
-          limits.max_acceleration.isConstant(limits.max_acceleration(0)) ? grey : colors[axis];
+      const auto rgb = limits.max_acceleration.isConstant(limits.max_acceleration(0)) ? grey : colors[axis];
       acc_panel.series.push_back(limit_series(limits.max_acceleration(axis), "", rgb));
       acc_panel.series.push_back(limit_series(-limits.max_acceleration(axis), "", rgb));
     }

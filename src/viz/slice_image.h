@@ -44,8 +44,7 @@ class SliceImage {
 
   // Throws std::invalid_argument when `height` is outside the field's z range or the image
   // cannot be created.
-  SliceImage(const Esdf& esdf, double height, int pixels_per_voxel, int max_image_size,
-             int min_width)
+  SliceImage(const Esdf& esdf, double height, int pixels_per_voxel, int max_image_size, int min_width)
       : nx_(esdf.box().size.x()),
         ny_(esdf.box().size.y()),
         resolution_(esdf.resolution()),
@@ -54,8 +53,7 @@ class SliceImage {
     const Eigen::AlignedBox3d metric = esdf.box().Metric(esdf.resolution());
     if (!std::isfinite(height) || height < metric.min().z() || height > metric.max().z()) {
       char message[160];
-      std::snprintf(message, sizeof(message),
-                    "slice height %g is outside the map's z range [%g, %g]", height,
+      std::snprintf(message, sizeof(message), "slice height %g is outside the map's z range [%g, %g]", height,
                     metric.min().z(), metric.max().z());
       throw std::invalid_argument(message);
     }
@@ -96,8 +94,8 @@ class SliceImage {
   }
 
   // The colour bar under the map with `low`/`high` labels at its ends and a caption line.
-  void DrawColourBar(const std::function<Rgb(double)>& colour, const std::string& low,
-                     const std::string& high, const std::string& caption) const {
+  void DrawColourBar(const std::function<Rgb(double)>& colour, const std::string& low, const std::string& high,
+                     const std::string& caption) const {
     cairo_t* c = context_.get();
     const int bar_x = 0, bar_y = map_height_ + kAxisBand + 6, bar_w = std::min(width_, 300);
     const int bar_h = 12;
@@ -134,9 +132,10 @@ class SliceImage {
     const double px_per_metre = ppv_ / resolution_;
     const double span = std::max(nx_, ny_) * resolution_;
     const double raw = span / 6.0, decade = std::pow(10.0, std::floor(std::log10(raw)));
-    const double step = raw <= decade ? decade : raw <= 2 * decade ? 2 * decade
-                        : raw <= 5 * decade                        ? 5 * decade
-                                                                   : 10 * decade;
+    const double step = raw <= decade       ? decade
+                        : raw <= 2 * decade ? 2 * decade
+                        : raw <= 5 * decade ? 5 * decade
+                                            : 10 * decade;
     cairo_set_source_rgb(c, 0, 0, 0);
     cairo_set_line_width(c, 1.0);
     cairo_rectangle(c, 0.5, 0.5, w - 1, h - 1);
@@ -148,8 +147,7 @@ class SliceImage {
     for (int axis = 0; axis < 2; ++axis) {
       const double origin = axis == 0 ? x0_ : y0_;
       const double length = (axis == 0 ? nx_ : ny_) * resolution_;
-      for (double v = std::ceil(origin / step - 1e-9) * step; v <= origin + length + 1e-9 * step;
-           v += step) {
+      for (double v = std::ceil(origin / step - 1e-9) * step; v <= origin + length + 1e-9 * step; v += step) {
         const double offset = (v - origin) * px_per_metre;
         std::snprintf(label, sizeof(label), "%g", std::abs(v) < 1e-9 * step ? 0.0 : v);
         cairo_text_extents(c, label, &extents);

@@ -32,15 +32,12 @@ using testing_support::RunCli;
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("timeopt_cli_test_" + std::to_string(::getpid()));
+    dir_ = std::filesystem::temp_directory_path() / ("timeopt_cli_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  void Write(const std::string& name, const std::string& text) const {
-    std::ofstream(Path(name)) << text;
-  }
+  void Write(const std::string& name, const std::string& text) const { std::ofstream(Path(name)) << text; }
   std::filesystem::path dir_;
 };
 
@@ -95,15 +92,14 @@ namespace {
 
 TEST_F(CliTest, TemporalSolvesTheContractExample) {
   for (const std::string solver : {"socp", "ipopt"}) {
-    const CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) +
-                            "/examples/line_problem.json --solver " + solver + " --output " +
-                            Path("r.json") + " --samples " + Path("s.csv") + " --rate 10 --plot " +
-                            Path("p.png"));
+    const CliRun r =
+        RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json --solver " + solver +
+               " --output " + Path("r.json") + " --samples " + Path("s.csv") + " --rate 10 --plot " + Path("p.png"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::string json = ReadTextFile(Path("r.json"));
     EXPECT_THAT(json, HasSubstr("\"status\": \"optimal\""));
     EXPECT_THAT(json, HasSubstr("\"solver\": \"" + solver + "\""));
-    EXPECT_THAT(json, HasSubstr("\"total_time\": 7.0")) << json;  // closed form L/v + v/a = 7
+    EXPECT_THAT(json, HasSubstr("\"total_time\": 7.0")) << json;          // closed form L/v + v/a = 7
     EXPECT_THAT(json, HasSubstr("\"reduced_accuracy\": false")) << json;  // the line solves to full accuracy
     const std::string csv = ReadTextFile(Path("s.csv"));
     EXPECT_EQ(csv.rfind("t,x,y,z,vx,vy,vz,ax,ay,az,jx,jy,jz\n", 0), 0u);
@@ -180,7 +176,8 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("max_solve_time_in_seconds"));
   // And for a conic problem: min x s.t. x >= 1 needs 64 MiB for the process alone.
-  Write("tiny.cbf", "VER\n3\nOBJSENSE\nMIN\nVAR\n1 1\nF 1\nCON\n1 1\nL+ 1\nOBJACOORD\n1\n0 1\nACOORD\n1\n0 0 1\nBCOORD\n1\n0 -1\n");
+  Write("tiny.cbf",
+        "VER\n3\nOBJSENSE\nMIN\nVAR\n1 1\nF 1\nCON\n1 1\nL+ 1\nOBJACOORD\n1\n0 1\nACOORD\n1\n0 0 1\nBCOORD\n1\n0 -1\n");
   r = RunCli("conic " + Path("tiny.cbf") + " --max-memory 1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("above the memory budget of 1 MiB"));
@@ -197,7 +194,8 @@ TEST_F(CliTest, AVerySlowPlanEndsWithinItsSampleCaps) {
   // and its picture (100 Hz) asked for 2e9 samples and never ended. Now the CSV is thinned to at
   // most 1e6 rows (the rate in output_rate_hz), and the flight check, above its 1e8 steps, says so.
   const CliRun r = RunCli("plan --max-velocity 1e-6 --max-acceleration 1e-6 --max-jerk 1e-6 -o " + Path("slow.csv") +
-                          " --plot " + Path("slow.png"), "2>" + Path("err.txt"));
+                              " --plot " + Path("slow.png"),
+                          "2>" + Path("err.txt"));
   ASSERT_EQ(r.exit_code, 0) << ReadTextFile(Path("err.txt"));
   const nlohmann::json summary = nlohmann::json::parse(r.output);
   const double T = summary["total_time"].get<double>();
@@ -220,14 +218,15 @@ TEST_F(CliTest, AnObstacleFreeMapIsPlannedInsideItsBox) {
     EXPECT_EQ(r.exit_code, 0) << extra << ": " << r.output;
   }
   // A map whose resolution is absurd is refused when read, naming the range.
-  r = RunCli("map generate forest --density 0 --resolution 1e300 --bounds 0 0 0 1e300 1e300 1e300 -o " + Path("huge.bt"));
+  r = RunCli("map generate forest --density 0 --resolution 1e300 --bounds 0 0 0 1e300 1e300 1e300 -o " +
+             Path("huge.bt"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.output, HasSubstr("[1e-6, 1e6]"));
 }
 
 TEST_F(CliTest, TemporalExportsItsSocpAndConicSolvesItToTheClosedForm) {
-  CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json" +
-                    " --export-cbf " + Path("line.cbf") + " -o " + Path("r.json"));
+  CliRun r = RunCli("temporal " + std::string(TIMEOPT_SOURCE_DIR) + "/examples/line_problem.json" + " --export-cbf " +
+                    Path("line.cbf") + " -o " + Path("r.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NEAR(JsonNumber(ReadTextFile(Path("r.json")), "objective"), 7.0, 1e-7);
   r = RunCli("conic " + Path("line.cbf") + " --repeat 3 -o " + Path("c.json"));
@@ -256,8 +255,7 @@ TEST_F(CliTest, ConicExitCodes) {
   EXPECT_THAT(r.output, HasSubstr("CBF line 5: VAR cones add up to 3, not 2"));
 
   // x >= 1 and -x >= 1.
-  Write("infeasible.cbf",
-        "VER\n3\nVAR\n1 1\nF 1\nCON\n2 1\nL+ 2\nACOORD\n2\n0 0 1\n1 0 -1\nBCOORD\n2\n0 -1\n1 -1\n");
+  Write("infeasible.cbf", "VER\n3\nVAR\n1 1\nF 1\nCON\n2 1\nL+ 2\nACOORD\n2\n0 0 1\n1 0 -1\nBCOORD\n2\n0 -1\n1 -1\n");
   r = RunCli("conic " + Path("infeasible.cbf") + " -o " + Path("i.json"));
   EXPECT_EQ(r.exit_code, 3) << r.output;
   const std::string json = ReadTextFile(Path("i.json"));
@@ -316,8 +314,7 @@ TEST_F(CliTest, SimulateReportsTheOvershootAndItsRemedy) {
   // the same overshoot (the vehicle starts on the first sample, already at amax).
   r = RunCli("temporal " + line + " -o " + Path("t.json") + " --samples " + Path("line.csv") + " --rate 1000");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = RunCli("simulate --samples " + Path("line.csv") + " --max-velocity 2 --max-acceleration 1 -o " +
-             Path("ss.json"));
+  r = RunCli("simulate --samples " + Path("line.csv") + " --max-velocity 2 --max-acceleration 1 -o " + Path("ss.json"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   json = ReadTextFile(Path("ss.json"));
   EXPECT_NEAR(JsonNumber(json, "max_acceleration_ratio"), 1.208, 0.005);
@@ -448,8 +445,10 @@ TEST_F(CliTest, CurveAndMapInfoPrintJson) {
 // the limit.
 TEST_F(CliTest, QuadrotorLimitsOnTheCommandLine) {
   const std::string waypoints = std::string(TIMEOPT_SOURCE_DIR) + "/examples/waypoints.csv";
-  CliRun r = RunCli("waypoints " + waypoints + " --max-speed 2.5 --max-thrust 12 --min-thrust 8 --max-tilt 0.4 "
-                    "-K 30 --constraint-mode certified --out-dir " + Path("wq"));
+  CliRun r = RunCli("waypoints " + waypoints +
+                    " --max-speed 2.5 --max-thrust 12 --min-thrust 8 --max-tilt 0.4 "
+                    "-K 30 --constraint-mode certified --out-dir " +
+                    Path("wq"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_THAT(r.output, HasSubstr("max_speed 2.5 m/s"));
   const std::string json = ReadTextFile(Path("wq/result.json"));

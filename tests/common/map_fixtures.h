@@ -17,8 +17,8 @@
 namespace timeopt::test_support {
 
 // Every voxel of the box occupied with probability `fill`, independently (seeded, reproducible).
-inline OccupancyGrid RandomGrid(const Eigen::Vector3i& min, const Eigen::Vector3i& size,
-                                double resolution, double fill, uint64_t seed) {
+inline OccupancyGrid RandomGrid(const Eigen::Vector3i& min, const Eigen::Vector3i& size, double resolution, double fill,
+                                uint64_t seed) {
   VoxelBox box;
   box.min = min;
   box.size = size;
@@ -46,8 +46,7 @@ struct ForestFixture {
 };
 
 // A free point at height 1.5 m with at least `clearance` (ESDF), x and y uniform in [lo, hi].
-inline Eigen::Vector3d FreePoint(const Esdf& esdf, std::mt19937* rng, double clearance, double lo,
-                                 double hi) {
+inline Eigen::Vector3d FreePoint(const Esdf& esdf, std::mt19937* rng, double clearance, double lo, double hi) {
   std::uniform_real_distribution<double> u(lo, hi);
   for (;;) {
     const Eigen::Vector3d p(u(*rng), u(*rng), 1.5);

@@ -55,8 +55,7 @@ TEST(Cbf, WriteThenReadGivesTheSameNumbersBitForBit) {
   builder.AddLessEqual({{2, 0.1}}, 7e22);
   builder.AddLessEqual({{1, 4.9e-324}}, 2.2250738585072009e-308);  // subnormal numbers
   builder.AddRotatedCone({AffineExpr{{{0, 1.0}}, 0.0}, AffineExpr{{{1, 2.0}}, 0.5}});
-  builder.AddSecondOrderCone({AffineExpr{{{3, 1.0}}, 1.0}, AffineExpr{{{0, -1.0}}, 0.0},
-                              AffineExpr{{}, 2.0}});
+  builder.AddSecondOrderCone({AffineExpr{{{3, 1.0}}, 1.0}, AffineExpr{{{0, -1.0}}, 0.0}, AffineExpr{{}, 2.0}});
   std::vector<AffineExpr> big(40);
   for (int i = 0; i < 40; ++i) big[static_cast<size_t>(i)] = AffineExpr{{{i % 4, 1.0 + i}}, -0.25 * i};
   builder.AddRotatedCone(big);

@@ -47,11 +47,11 @@ TEST(ProblemBuilderTest, OrdersRowsAsTheConeSpecRequires) {
   const Eigen::MatrixXd G(problem.G);
   Eigen::MatrixXd expected_G(6, 3);
   // s = h - G x: the orthant row 7 - 5 x1, the SOC (1 + x2, 3 x0), the rotated cone (x0, 0.5, 2 x1).
-  expected_G << 0, 5, 0,   //
-      0, 0, -1,            //
-      -3, 0, 0,            //
-      -1, 0, 0,            //
-      0, 0, 0,             //
+  expected_G << 0, 5, 0,  //
+      0, 0, -1,           //
+      -3, 0, 0,           //
+      -1, 0, 0,           //
+      0, 0, 0,            //
       0, -2, 0;
   EXPECT_EQ(G, expected_G);  // exact: only copies and sign changes
   EXPECT_EQ(problem.h, Eigen::VectorXd((Eigen::VectorXd(6) << 7, 1, 0, 0, 0.5, 0).finished()));

@@ -39,7 +39,8 @@ struct Example {
 std::vector<Example> Examples() {
   std::vector<Example> examples;
   // LP: max x + y s.t. x + 2y <= 4, 3x + y <= 6, x, y >= 0. Vertex (1.6, 1.2), value -2.8.
-  examples.push_back({"lp_vertex", [] {
+  examples.push_back({"lp_vertex",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(2);
                         b.SetObjectiveCoefficient(0, -1.0);
@@ -52,7 +53,8 @@ std::vector<Example> Examples() {
                       },
                       -2.8, Eigen::Vector2d(1.6, 1.2)});
   // LP on the simplex: min x0 + 2 x1 + 3 x2, sum x = 1, x >= 0 -> x = e0.
-  examples.push_back({"lp_simplex", [] {
+  examples.push_back({"lp_simplex",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(3);
                         for (int i = 0; i < 3; ++i) {
@@ -64,7 +66,8 @@ std::vector<Example> Examples() {
                       },
                       1.0, Eigen::Vector3d(1.0, 0.0, 0.0)});
   // LP with a free variable: min t s.t. t >= |x - 3|, x <= 1 -> x = 1, t = 2.
-  examples.push_back({"lp_absolute_value", [] {
+  examples.push_back({"lp_absolute_value",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(2);  // t, x
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -75,7 +78,8 @@ std::vector<Example> Examples() {
                       },
                       2.0, Eigen::Vector2d(2.0, 1.0)});
   // SOC: distance from (1, 2) to the line x + y = 1 is |1 + 2 - 1| / sqrt(2) = sqrt(2).
-  examples.push_back({"soc_distance_to_line", [] {
+  examples.push_back({"soc_distance_to_line",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(3);  // t, x, y
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -85,7 +89,8 @@ std::vector<Example> Examples() {
                       },
                       std::sqrt(2.0), Eigen::Vector3d(std::sqrt(2.0), 0.0, 1.0)});
   // Optimum on the boundary of the unit disc: min x + y, ||(x, y)|| <= 1 -> x = y = -1/sqrt(2).
-  examples.push_back({"soc_boundary_of_disc", [] {
+  examples.push_back({"soc_boundary_of_disc",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(2);
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -95,7 +100,8 @@ std::vector<Example> Examples() {
                       },
                       -std::sqrt(2.0), Eigen::Vector2d(-std::sqrt(0.5), -std::sqrt(0.5))});
   // A large cone (dimension 11, sparse expansion by default): min sum x s.t. ||x|| <= 1 -> -sqrt(10).
-  examples.push_back({"soc_large_ball", [] {
+  examples.push_back({"soc_large_ball",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(10);
                         std::vector<AffineExpr> rows = {Const(1.0)};
@@ -109,7 +115,8 @@ std::vector<Example> Examples() {
                       -std::sqrt(10.0), Eigen::VectorXd::Constant(10, -1.0 / std::sqrt(10.0))});
   // Fermat point of the equilateral triangle (0,0), (1,0), (1/2, sqrt3/2): the centroid, each
   // distance 1/sqrt3, total sqrt3.
-  examples.push_back({"soc_fermat_point", [] {
+  examples.push_back({"soc_fermat_point",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(5);  // px, py, t0, t1, t2
                         const double pts[3][2] = {{0, 0}, {1, 0}, {0.5, std::sqrt(3.0) / 2}};
@@ -121,7 +128,8 @@ std::vector<Example> Examples() {
                       },
                       std::sqrt(3.0), Eigen::VectorXd()});
   // Rotated cone: min t s.t. t u >= x^2 with u = 2, x = 3, i.e. 2 t (u/2) >= x^2 -> t = 4.5.
-  examples.push_back({"rotated_t_u_x2", [] {
+  examples.push_back({"rotated_t_u_x2",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(3);  // t, u, x
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -132,7 +140,8 @@ std::vector<Example> Examples() {
                       },
                       4.5, Eigen::Vector3d(4.5, 2.0, 3.0)});
   // Hyperbolic constraint: min x + y s.t. x y >= 1 -> x = y = 1 (rotated cone (x, y, sqrt2)).
-  examples.push_back({"rotated_hyperbola", [] {
+  examples.push_back({"rotated_hyperbola",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(2);
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -150,7 +159,8 @@ std::vector<Example> Examples() {
     const Eigen::VectorXd xs = M.colPivHouseholderQr().solve(q);
     Eigen::VectorXd expected(4);
     expected << (M * xs - q).norm(), xs;
-    examples.push_back({"least_squares", [M, q] {
+    examples.push_back({"least_squares",
+                        [M, q] {
                           ProblemBuilder b;
                           b.AddVariables(4);  // t, x0..x2
                           b.SetObjectiveCoefficient(0, 1.0);
@@ -176,7 +186,8 @@ std::vector<Example> Examples() {
     const double variance = 1.0 / w.sum();
     Eigen::VectorXd expected(5);
     expected << variance, w * variance;
-    examples.push_back({"portfolio_min_variance", [L] {
+    examples.push_back({"portfolio_min_variance",
+                        [L] {
                           ProblemBuilder b;
                           b.AddVariables(5);  // t, x0..x3
                           b.SetObjectiveCoefficient(0, 1.0);
@@ -199,7 +210,8 @@ std::vector<Example> Examples() {
   }
   // Optimum at the apex of a cone: min t s.t. t >= ||(x, y)||, x + y >= 1... shifted: x + y = 0 and
   // x >= 0, y >= 0 force x = y = 0, so t = 0 at the apex.
-  examples.push_back({"soc_apex", [] {
+  examples.push_back({"soc_apex",
+                      [] {
                         ProblemBuilder b;
                         b.AddVariables(3);
                         b.SetObjectiveCoefficient(0, 1.0);
@@ -247,8 +259,7 @@ TEST_P(KnownOptimumTest, ReachesTheClosedFormOptimum) {
   if (param.example.optimal_x.size() > 0) {
     // These optima are unique and the problems well conditioned (strict complementarity), so x is
     // Lipschitz in the gap: 1e-6 is a safe margin over the observed ~1e-9.
-    EXPECT_LT((result.x - param.example.optimal_x).lpNorm<Eigen::Infinity>(), 1e-6)
-        << result.x.transpose();
+    EXPECT_LT((result.x - param.example.optimal_x).lpNorm<Eigen::Infinity>(), 1e-6) << result.x.transpose();
   }
   EXPECT_TRUE(result.x.allFinite() && result.y.allFinite() && result.z.allFinite() && result.s.allFinite());
   EXPECT_LE(result.iterations, 30);
@@ -396,9 +407,7 @@ TEST(InfeasibilityTest, PrimalInfeasibleLp) {
   b.AddLessEqual({{0, 1.0}}, 0.0);      // x <= 0
   b.AddEquality({{1, 1.0}}, 2.0);
   const Problem problem = b.Build();
-  ForBothKktMethods(problem, [&](const Result& result) {
-    ExpectPrimalInfeasibilityCertificate(problem, result);
-  });
+  ForBothKktMethods(problem, [&](const Result& result) { ExpectPrimalInfeasibilityCertificate(problem, result); });
 }
 
 TEST(InfeasibilityTest, PrimalInfeasibleSocAndRotated) {
@@ -406,8 +415,8 @@ TEST(InfeasibilityTest, PrimalInfeasibleSocAndRotated) {
   b.AddVariables(3);
   b.SetObjectiveCoefficient(0, 1.0);
   b.AddSecondOrderCone({Const(1.0), Var(0), Var(1)});  // ||(x, y)|| <= 1
-  b.AddNonnegative(Var(0, 1.0, -2.0));                  // x >= 2
-  b.AddRotatedCone({Var(2), Var(2), Const(1.0)});       // 2 w^2 >= 1, feasible by itself
+  b.AddNonnegative(Var(0, 1.0, -2.0));                 // x >= 2
+  b.AddRotatedCone({Var(2), Var(2), Const(1.0)});      // 2 w^2 >= 1, feasible by itself
   const Problem problem = b.Build();
   for (int min_dim : {6, 1}) {
     for (Solver::Options options : BothKktMethods()) {
@@ -427,9 +436,7 @@ TEST(InfeasibilityTest, DualInfeasibleLp) {
   b.AddNonnegative(Var(0));
   b.AddEquality({{1, 1.0}}, 1.0);
   const Problem problem = b.Build();
-  ForBothKktMethods(problem, [&](const Result& result) {
-    ExpectDualInfeasibilityCertificate(problem, result);
-  });
+  ForBothKktMethods(problem, [&](const Result& result) { ExpectDualInfeasibilityCertificate(problem, result); });
 }
 
 TEST(InfeasibilityTest, DualInfeasibleSoc) {
@@ -441,9 +448,7 @@ TEST(InfeasibilityTest, DualInfeasibleSoc) {
   b.AddSecondOrderCone({Var(0), Var(1)});
   b.AddRotatedCone({Var(0), Const(1.0), Const(0.5)});  // 2 t >= 1/4
   const Problem problem = b.Build();
-  ForBothKktMethods(problem, [&](const Result& result) {
-    ExpectDualInfeasibilityCertificate(problem, result);
-  });
+  ForBothKktMethods(problem, [&](const Result& result) { ExpectDualInfeasibilityCertificate(problem, result); });
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -477,9 +482,9 @@ TEST(DegenerateTest, AllZeroRows) {
   ProblemBuilder b;
   b.AddVariables(3);  // the last variable appears nowhere
   b.SetObjectiveCoefficient(0, 1.0);
-  b.AddNonnegative(Var(0, 1.0, -2.0));   // x >= 2
-  b.AddNonnegative(Const(1.0));          // 1 >= 0: a zero row of G
-  b.AddEquality({}, 0.0);                // 0 = 0: a zero row of A
+  b.AddNonnegative(Var(0, 1.0, -2.0));  // x >= 2
+  b.AddNonnegative(Const(1.0));         // 1 >= 0: a zero row of G
+  b.AddEquality({}, 0.0);               // 0 = 0: a zero row of A
   b.AddSecondOrderCone({Const(1.0), Const(0.0), Var(1)});
   const Problem problem = b.Build();
   ForBothKktMethods(problem, [&](const Result& result) {
@@ -716,7 +721,7 @@ TEST(RandomProblemTest, OptimalityCertifiedByTheReturnedVectors) {
   for (unsigned trial = 0; trial < 180; ++trial) {
     // Each problem with the automatic choice and with each method forced.
     const unsigned seed = trial / 3;
-    const KktMethod method = trial % 3 == 0 ? KktMethod::kAutomatic
+    const KktMethod method = trial % 3 == 0   ? KktMethod::kAutomatic
                              : trial % 3 == 1 ? KktMethod::kAugmentedSparse
                                               : KktMethod::kReducedBanded;
     const Problem problem = RandomFeasibleProblem(seed);
@@ -849,7 +854,8 @@ TEST(KktMethodTest, TheSparseFactorIsRefusedAboveItsBudgetBeforeItIsBuilt) {
     tight.Solve(problem);
     ADD_FAILURE() << "a factor of " << needed << " bytes solved under a budget of " << needed - 1;
   } catch (const std::invalid_argument& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr(std::to_string(free_solve.factor_nonzeros) + " non-zeros with its fill-in"));
+    EXPECT_THAT(e.what(),
+                ::testing::HasSubstr(std::to_string(free_solve.factor_nonzeros) + " non-zeros with its fill-in"));
   }
   options.max_factor_bytes = needed;
   tight.set_options(options);

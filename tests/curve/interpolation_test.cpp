@@ -74,8 +74,8 @@ PiecewiseCurve Perturb(const PiecewiseCurve& c, std::mt19937& rng, double size) 
   for (int i = 0; i < m; ++i) {
     // Quintic Hermite correction with zero position change at both ends.
     Eigen::Matrix<double, 6, 6> h;
-    h << 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0.5, 0, 0, 0, -10, -6, -1.5, 10, -4, 0.5, 15, 8,
-        1.5, -15, 7, -1, -6, -3, -0.5, 6, -3, 0.5;
+    h << 1, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0.5, 0, 0, 0, -10, -6, -1.5, 10, -4, 0.5, 15, 8, 1.5, -15, 7, -1, -6,
+        -3, -0.5, 6, -3, 0.5;
     Eigen::Matrix<double, 6, 3> ends = Eigen::Matrix<double, 6, 3>::Zero();
     ends.row(1) = dv[i].transpose();
     ends.row(2) = da[i].transpose();
@@ -153,8 +153,9 @@ TEST(PiecewiseCurveArcLength, HugeCurvesTerminateAndAreAccurate) {
     const double h = 1.0 / kPanels;
     for (int k = 0; k < kPanels; ++k) {
       const double a = k * h;
-      reference += h / 6.0 * (c.Evaluate(i, a, 1).norm() + 4.0 * c.Evaluate(i, a + 0.5 * h, 1).norm() +
-                              c.Evaluate(i, a + h, 1).norm());
+      reference +=
+          h / 6.0 *
+          (c.Evaluate(i, a, 1).norm() + 4.0 * c.Evaluate(i, a + 0.5 * h, 1).norm() + c.Evaluate(i, a + h, 1).norm());
     }
   }
   EXPECT_NEAR(c.ArcLength(1e-9), reference, 1e-9 * reference);

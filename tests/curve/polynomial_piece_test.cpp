@@ -31,10 +31,8 @@ TEST(PolynomialPiece, DerivativesMatchCentralDifferences) {
         // h^2/6 |f^(d+2)| <= ~1e-10 * 7^4 * 2 and rounding ~1e-16/h * |f| ~ 1e-10; 1e-5 covers
         // both with margin for coefficients up to 2 and degree 7.
         const double h = 1e-5;
-        const Eigen::Vector3d fd =
-            (p.Evaluate(s + h, d - 1) - p.Evaluate(s - h, d - 1)) / (2.0 * h);
-        EXPECT_LT((fd - p.Evaluate(s, d)).norm(), 1e-5 * (1.0 + fd.norm()))
-            << "order " << d << " at s=" << s;
+        const Eigen::Vector3d fd = (p.Evaluate(s + h, d - 1) - p.Evaluate(s - h, d - 1)) / (2.0 * h);
+        EXPECT_LT((fd - p.Evaluate(s, d)).norm(), 1e-5 * (1.0 + fd.norm())) << "order " << d << " at s=" << s;
       }
     }
   }

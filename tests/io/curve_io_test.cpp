@@ -27,7 +27,8 @@ TEST(CurveJson, RoundTripIsBitExact) {
   std::vector<PolynomialPiece> pieces;
   for (int i = 0; i < 4; ++i) {
     PolynomialPiece::Coefficients c(3, 3 + i);
-    for (int j = 0; j < c.cols(); ++j) for (int a = 0; a < 3; ++a) c(a, j) = u(rng);
+    for (int j = 0; j < c.cols(); ++j)
+      for (int a = 0; a < 3; ++a) c(a, j) = u(rng);
     pieces.emplace_back(c);
   }
   const PiecewiseCurve curve(pieces);
@@ -42,8 +43,7 @@ TEST(CurveJson, RoundTripIsBitExact) {
 
 TEST(CurveJson, DurationsRescaleToUnitPieces) {
   // x(tau) = tau on [0, 2]: as a unit piece x(s) = 2 s.
-  const CurveFile f = ParseCurveJson(
-      R"({"pieces": [{"x": [0, 1], "y": [0, 0], "z": [1, 0]}], "durations": [2.0]})");
+  const CurveFile f = ParseCurveJson(R"({"pieces": [{"x": [0, 1], "y": [0, 0], "z": [1, 0]}], "durations": [2.0]})");
   ASSERT_TRUE(f.durations.has_value());
   EXPECT_EQ((*f.durations)[0], 2.0);
   EXPECT_EQ(f.curve.Evaluate(0, 1.0), Eigen::Vector3d(2, 0, 1));
@@ -53,8 +53,7 @@ TEST(CurveJson, DurationsRescaleToUnitPieces) {
 // same as with every axis written out.
 TEST(CurveJson, ShorterAxesArePaddedWithZeros) {
   const CurveFile short_axes = ParseCurveJson(R"({"pieces": [{"x": [0, 10, 0.5], "y": [2], "z": [1, 3]}]})");
-  const CurveFile full =
-      ParseCurveJson(R"({"pieces": [{"x": [0, 10, 0.5], "y": [2, 0, 0], "z": [1, 3, 0]}]})");
+  const CurveFile full = ParseCurveJson(R"({"pieces": [{"x": [0, 10, 0.5], "y": [2, 0, 0], "z": [1, 3, 0]}]})");
   EXPECT_EQ(short_axes.curve.piece(0).coefficients(), full.curve.piece(0).coefficients());
 }
 
@@ -74,8 +73,7 @@ TEST(CurveJson, BadInputNamesTheField) {
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1], "y": [1]}]})"), HasSubstr("curve.pieces[0].z: missing"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [], "y": [], "z": []}]})"),
               HasSubstr("curve.pieces[0].x: expected at least 1 coefficient"));
-  EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1e999], "y": [0], "z": [0]}]})"),
-              HasSubstr("1e999"));
+  EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1e999], "y": [0], "z": [0]}]})"), HasSubstr("1e999"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1], "y": [0], "z": [0]}], "durations": [0]})"),
               HasSubstr("curve.durations[0]: expected a positive duration"));
   EXPECT_THAT(ErrorOf(R"({"pieces": [{"x": [1], "y": [0], "z": [0]}], "durations": [1, 2]})"),
@@ -84,8 +82,7 @@ TEST(CurveJson, BadInputNamesTheField) {
 
 TEST(CurveJson, UnreadableFileIsAFileError) {
   EXPECT_THROW(ReadCurveJson("/nonexistent/dir/curve.json"), FileError);
-  EXPECT_THROW(WriteCurveJson(PiecewiseCurve({PolynomialPiece()}), "/nonexistent/dir/c.json"),
-               FileError);
+  EXPECT_THROW(WriteCurveJson(PiecewiseCurve({PolynomialPiece()}), "/nonexistent/dir/c.json"), FileError);
 }
 
 TEST(WaypointsCsv, ParsesHeaderCommentsAndRows) {

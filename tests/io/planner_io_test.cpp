@@ -132,7 +132,8 @@ TEST(PlannerConfigJson, ErrorsNameTheJsonKey) {
   EXPECT_THAT(ErrorOf(R"({"temporal": {"K": 2.5}})"), HasSubstr("config.temporal.K: expected an integer"));
   EXPECT_THAT(ErrorOf(R"({"temporal": {"K": 100001}})"), HasSubstr("config.temporal.K"));
   EXPECT_THAT(ErrorOf(R"({"limits": {"max_velocity": [1, 2]}})"), HasSubstr("config.limits.max_velocity"));
-  EXPECT_THAT(ErrorOf(R"({"limits": {"max_velocity": "fast"}})"), HasSubstr("config.limits.max_velocity: expected an array"));
+  EXPECT_THAT(ErrorOf(R"({"limits": {"max_velocity": "fast"}})"),
+              HasSubstr("config.limits.max_velocity: expected an array"));
   EXPECT_THAT(ErrorOf(R"({"limits": {"max_sped": 2}})"), HasSubstr("config.limits.max_sped: unknown key"));
   EXPECT_THAT(ErrorOf(R"({"search": []})"), HasSubstr("config.search: expected an object"));
   EXPECT_THAT(ErrorOf(R"({"max_attempts": 1e30})"), HasSubstr("config.max_attempts"));

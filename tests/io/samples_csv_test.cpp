@@ -47,7 +47,8 @@ TEST(SamplesCsv, RoundTripIsExact) {
 TEST(SamplesCsv, JerkFromAccelerationWhenAbsent) {
   const auto s = ParseSamplesCsv(
       "# from another planner\r\nt, x, y, z, vx, vy, vz, ax, ay, az\r\n"
-      "0,0,0,0,0,0,0,1,0,0\r\n0.5,0.125,0,0,0.5,0,0,2,0,-1\r\n1.5,1,0,0,2,0,0,2,0,0\r\n", "s.csv");
+      "0,0,0,0,0,0,0,1,0,0\r\n0.5,0.125,0,0,0.5,0,0,2,0,-1\r\n1.5,1,0,0,2,0,0,2,0,0\r\n",
+      "s.csv");
   ASSERT_EQ(s.size(), 3u);
   EXPECT_EQ(s[0].jerk, Eigen::Vector3d(2.0, 0.0, -2.0));  // (2 - 1) / 0.5, (-1 - 0) / 0.5
   EXPECT_EQ(s[1].jerk, Eigen::Vector3d(0.0, 0.0, 1.0));   // (0 - -1) / 1

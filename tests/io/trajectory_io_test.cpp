@@ -28,7 +28,7 @@ constexpr double kPi = 3.14159265358979323846;
 // The shipped example's waypoints, minimum-jerk, timed with and without a jerk limit.
 Trajectory Solved(bool jerk_limited, int K = 20) {
   Waypoints w(3, 5);
-  w << 0, 2, 4, 1, -1,  //
+  w << 0, 2, 4, 1, -1,    //
       0, 0.5, 2.5, 6, 9,  //
       1, 1.2, 1.5, 1.8, 2;
   TemporalProblem problem;
@@ -105,7 +105,8 @@ TEST(TrajectoryFile, BadFilesAreRefusedNamingTheField) {
   ExpectRefused(replaced("\"version\": 1", "\"version\": 2"), "t.json.version: 2 is not supported");
   ExpectRefused(replaced("\"frame\": \"ENU\"", "\"frame\": \"NED\""), "t.json.frame: expected \"ENU\"");
   ExpectRefused(replaced("\"duration\": ", "\"duration\": 1"), "t.json.duration:");
-  ExpectRefused(replaced("\"cells_per_piece\": 8", "\"cells_per_piece\": 9"), "t.json.profile.half_b[0]: expected 19 numbers");
+  ExpectRefused(replaced("\"cells_per_piece\": 8", "\"cells_per_piece\": 9"),
+                "t.json.profile.half_b[0]: expected 19 numbers");
   ExpectRefused(replaced("\"quadratic\"", "\"resting\""), "t.json.profile.shapes[0][0]: expected");
   ExpectRefused(replaced("\"profile\": {", "\"profile\": {\"extra\": 1, "), "t.json.profile.extra: unknown key");
   ExpectRefused(replaced("\"half_b\": [", "\"b\": [[1]], \"half_b\": ["), "either \"b\"");

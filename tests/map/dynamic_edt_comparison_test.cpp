@@ -20,8 +20,7 @@ namespace {
 TEST(DynamicEdtComparisonTest, Geb079AgreesWithinOneVoxel) {
   const std::string path = std::string(TIMEOPT_SHARED_DIR) + "/maps/geb079.bt";
   if (!std::filesystem::exists(path)) {
-    GTEST_SKIP() << "skipped: " << path
-                 << " not found (the shared maps folder beside the repository is absent)";
+    GTEST_SKIP() << "skipped: " << path << " not found (the shared maps folder beside the repository is absent)";
   }
   const OccupancyMap map = OccupancyMap::Load(path, UnknownSpace::kFree);
   const Esdf esdf = Esdf::FromMap(map);
@@ -29,11 +28,9 @@ TEST(DynamicEdtComparisonTest, Geb079AgreesWithinOneVoxel) {
 
   octomap::OcTree tree(path);
   const Eigen::AlignedBox3d domain = esdf.domain();  // first and last voxel centres
-  const octomap::point3d lo(static_cast<float>(domain.min().x()),
-                            static_cast<float>(domain.min().y()),
+  const octomap::point3d lo(static_cast<float>(domain.min().x()), static_cast<float>(domain.min().y()),
                             static_cast<float>(domain.min().z()));
-  const octomap::point3d hi(static_cast<float>(domain.max().x()),
-                            static_cast<float>(domain.max().y()),
+  const octomap::point3d hi(static_cast<float>(domain.max().x()), static_cast<float>(domain.max().y()),
                             static_cast<float>(domain.max().z()));
   // A maximum distance beyond the box diagonal: DynamicEDTOctomap then computes the whole
   // unbounded field, like ours. Unknown counts as free on both sides.
@@ -67,8 +64,8 @@ TEST(DynamicEdtComparisonTest, Geb079AgreesWithinOneVoxel) {
         // Float storage on both sides: a few 1e-6 m. Beyond that, DynamicEDT3D's propagation is
         // not exact everywhere; the issue asks for agreement within one voxel.
         if (difference < 1e-5) ++exact;
-        ASSERT_LE(difference, r) << "voxel " << index.transpose() << ": ours " << ours
-                                 << " + r/2, DynamicEDTOctomap " << theirs;
+        ASSERT_LE(difference, r) << "voxel " << index.transpose() << ": ours " << ours << " + r/2, DynamicEDTOctomap "
+                                 << theirs;
       }
     }
   }

@@ -50,11 +50,11 @@ TEST(EsdfTest, ExactAtVoxelCentresAgainstBruteForce) {
     double resolution, fill;
   };
   const std::vector<Case> cases = {
-      {{0, 0, 0}, {11, 9, 7}, 0.1, 0.05},      // sparse obstacles: long distances
-      {{-5, 3, -2}, {8, 13, 6}, 0.05, 0.3},    // negative indices, dense
-      {{2, -7, 0}, {16, 5, 1}, 0.2, 0.1},      // a single layer (flat z)
-      {{0, 0, 0}, {1, 12, 9}, 0.1, 0.15},      // flat x
-      {{0, 0, 0}, {9, 9, 9}, 0.08, 0.7},       // mostly occupied: long negative distances
+      {{0, 0, 0}, {11, 9, 7}, 0.1, 0.05},    // sparse obstacles: long distances
+      {{-5, 3, -2}, {8, 13, 6}, 0.05, 0.3},  // negative indices, dense
+      {{2, -7, 0}, {16, 5, 1}, 0.2, 0.1},    // a single layer (flat z)
+      {{0, 0, 0}, {1, 12, 9}, 0.1, 0.15},    // flat x
+      {{0, 0, 0}, {9, 9, 9}, 0.08, 0.7},     // mostly occupied: long negative distances
   };
   uint64_t seed = 7;
   for (const Case& c : cases) {
@@ -96,8 +96,8 @@ TEST(EsdfTest, PlanarWallIsExactEverywhereWithUnitGradient) {
   const Eigen::AlignedBox3d domain = esdf.domain();
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int i = 0; i < 500; ++i) {
-    const Eigen::Vector3d p = domain.min() + (domain.max() - domain.min()).cwiseProduct(
-                                                 Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+    const Eigen::Vector3d p =
+        domain.min() + (domain.max() - domain.min()).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
     Eigen::Vector3d g;
     const double d = esdf.DistanceAndGradient(p, &g);
     // Float storage of values up to 0.8 m: 1e-6 m; gradient: that over a 0.1 m cell, 1e-5.
@@ -152,8 +152,7 @@ TEST(EsdfTest, GradientPointsAwayFromASingleObstacle) {
   std::mt19937_64 rng(9);
   std::normal_distribution<double> normal;
   for (int i = 0; i < 300; ++i) {
-    const Eigen::Vector3d direction =
-        Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const Eigen::Vector3d direction = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
     const double radius = 0.6 + 0.8 * (i % 10) / 10.0;  // 6 to 14 voxels from the obstacle
     const Eigen::Vector3d p = obstacle + radius * direction;
     Eigen::Vector3d g;
@@ -176,8 +175,7 @@ TEST(EsdfTest, OutsideTheBoxAddsTheDistanceToTheBox) {
   int outside = 0;
   for (int i = 0; i < 500; ++i) {
     const Eigen::Vector3d p =
-        domain.min() + (domain.max() - domain.min())
-                           .cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+        domain.min() + (domain.max() - domain.min()).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
     const Eigen::Vector3d q = p.cwiseMax(domain.min()).cwiseMin(domain.max());
     const double expected = esdf.Distance(q) + (p - q).norm();
     // Same float values, same arithmetic up to the order of additions.
@@ -192,8 +190,7 @@ TEST(EsdfTest, OutsideTheBoxAddsTheDistanceToTheBox) {
       bool near_kink = false;
       for (int a = 0; a < 3; ++a) {
         const double u = (q(a) - domain.min()(a)) / grid.resolution;
-        near_kink |= std::abs(p(a) - domain.min()(a)) < 1e-4 ||
-                     std::abs(p(a) - domain.max()(a)) < 1e-4 ||
+        near_kink |= std::abs(p(a) - domain.min()(a)) < 1e-4 || std::abs(p(a) - domain.max()(a)) < 1e-4 ||
                      (p(a) == q(a) && std::abs(u - std::round(u)) < 1e-3);
       }
       if (near_kink) continue;
@@ -254,8 +251,7 @@ TEST(EsdfTest, NonFinitePointGivesNonFiniteDistanceWithoutCrashing) {
   const Esdf esdf(grid);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(std::isnan(esdf.Distance(Eigen::Vector3d(nan, 0.3, 0.3))));
-  EXPECT_FALSE(std::isfinite(
-      esdf.Distance(Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0.3, 0.3))));
+  EXPECT_FALSE(std::isfinite(esdf.Distance(Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0.3, 0.3))));
 }
 
 TEST(EsdfTest, InvalidGridsThrowClearErrors) {
@@ -339,11 +335,12 @@ TEST(EsdfTest, AnObstacleFreeMapIsBoundedByItsFaces) {
   for (const bool region : {false, true}) {
     // A region far larger than the map (a margin of 1e9 m) is the whole map.
     const Esdf esdf = region ? Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-1e9),
-                                                                           Eigen::Vector3d::Constant(1e9)))
+                                                                            Eigen::Vector3d::Constant(1e9)))
                              : Esdf::FromMap(map);
     const VoxelBox box = esdf.box();
     ASSERT_EQ(box.size, Eigen::Vector3i(100, 100, 30)) << "region " << region;
-    for (const Eigen::Vector3i& v : {Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(3, 40, 20), Eigen::Vector3i(60, 97, 10)}) {
+    for (const Eigen::Vector3i& v :
+         {Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(3, 40, 20), Eigen::Vector3i(60, 97, 10)}) {
       const Eigen::Vector3i from_low = v - box.min, from_high = box.end() - Eigen::Vector3i::Ones() - v;
       const double voxels = std::min(from_low.minCoeff(), from_high.minCoeff());
       // A free centre k voxels from an occupied layer: the zero level set lies half a voxel out.
@@ -359,7 +356,7 @@ TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
   const Eigen::AlignedBox3d region(Eigen::Vector3d(2.0, 1.0, -5.0), Eigen::Vector3d(8.0, 9.0, 5.0));
   const Esdf part = Esdf::FromMapRegion(forest.map, region);
   const VoxelBox box = part.box();
-  ASSERT_EQ(box.min, Eigen::Vector3i(20, 10, 0));        // clipped to the map in z
+  ASSERT_EQ(box.min, Eigen::Vector3i(20, 10, 0));  // clipped to the map in z
   ASSERT_EQ(box.size, Eigen::Vector3i(60, 80, 30));
   const double r = part.resolution();
   int equal = 0, checked = 0;
@@ -371,8 +368,8 @@ TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
         ++checked;
         ASSERT_LE(d_part, d_whole + kFloatStorageTolerance) << v.transpose();
         // Centre distance to the nearest cut layer (x and y faces are cut, z is not).
-        const double to_cut = r * std::min({x - box.min.x(), box.end().x() - 1 - x, y - box.min.y(),
-                                            box.end().y() - 1 - y});
+        const double to_cut =
+            r * std::min({x - box.min.x(), box.end().x() - 1 - x, y - box.min.y(), box.end().y() - 1 - y});
         if (d_whole > 0.0 && d_whole + 0.5 * r < to_cut) {
           ASSERT_NEAR(d_part, d_whole, kFloatStorageTolerance) << v.transpose();
           ++equal;
@@ -383,38 +380,32 @@ TEST(EsdfTest, RegionOfInterestIsALowerBoundAndExactAwayFromItsCuts) {
   // The equality is checked on a large part of the region (44% of its voxels here).
   EXPECT_GT(equal, checked / 3);
   // A region that misses the map, and one of zero size, are refused.
-  EXPECT_THROW(Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(20, 20, 0),
-                                                                   Eigen::Vector3d(30, 30, 3))),
-               std::invalid_argument);
-  EXPECT_THROW(Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(2, 2, 1),
-                                                                   Eigen::Vector3d(2, 8, 2))),
+  EXPECT_THROW(
+      Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(20, 20, 0), Eigen::Vector3d(30, 30, 3))),
+      std::invalid_argument);
+  EXPECT_THROW(Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d(2, 2, 1), Eigen::Vector3d(2, 8, 2))),
                std::invalid_argument);
   // A region holding the whole map has no cut: the same field as FromMap.
-  const Esdf all = Esdf::FromMapRegion(forest.map, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-50),
-                                                                       Eigen::Vector3d::Constant(50)));
+  const Esdf all = Esdf::FromMapRegion(
+      forest.map, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-50), Eigen::Vector3d::Constant(50)));
   ASSERT_EQ(all.box().size, whole.box().size);
-  for (const Eigen::Vector3i& v : {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(99, 99, 29)}) {
+  for (const Eigen::Vector3i& v :
+       {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(50, 50, 15), Eigen::Vector3i(99, 99, 29)}) {
     EXPECT_EQ(all.VoxelDistance(v), whole.VoxelDistance(v));
   }
 }
 
 TEST(VoxelBoxTest, CoveringSnapsOutwardsAndRejectsZeroSize) {
-  const VoxelBox box = VoxelBox::Covering(
-      Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, 0.0, 0.31), Eigen::Vector3d(0.2, 0.05, 0.4)), 0.1);
+  const VoxelBox box =
+      VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d(-0.15, 0.0, 0.31), Eigen::Vector3d(0.2, 0.05, 0.4)), 0.1);
   EXPECT_EQ(box.min, Eigen::Vector3i(-2, 0, 3));
   EXPECT_EQ(box.size, Eigen::Vector3i(4, 1, 1));
-  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(),
-                                                      Eigen::Vector3d(1, 1, 0)),
-                                  0.1),
+  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 1, 0)), 0.1),
                std::invalid_argument);
   EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(), 0.1), std::invalid_argument);
-  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(),
-                                                      Eigen::Vector3d::Ones()),
-                                  -1.0),
+  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()), -1.0),
                std::invalid_argument);
-  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(),
-                                                      Eigen::Vector3d::Constant(1e6)),
-                                  0.1),
+  EXPECT_THROW(VoxelBox::Covering(Eigen::AlignedBox3d(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(1e6)), 0.1),
                std::invalid_argument);
 }
 

@@ -74,12 +74,11 @@ TEST_F(MapCommandTest, GenerateInfoAndSliceASharpTurn) {
 }
 
 TEST_F(MapCommandTest, GenerateForestAndBoxesWithBounds) {
-  const CliRun forest = RunCli("map generate forest --bounds 0 0 0 4 3 1 --density 0.5 --seed 3 -o " +
-                               Path("forest.bt"));
+  const CliRun forest =
+      RunCli("map generate forest --bounds 0 0 0 4 3 1 --density 0.5 --seed 3 -o " + Path("forest.bt"));
   ASSERT_EQ(forest.exit_code, 0) << forest.output;
   EXPECT_THAT(forest.output, HasSubstr("voxels: 12000"));  // 40 x 30 x 10
-  const CliRun boxes =
-      RunCli("map generate boxes --bounds 0 0 0 4 3 1 --count 3 --ground -o " + Path("boxes.bt"));
+  const CliRun boxes = RunCli("map generate boxes --bounds 0 0 0 4 3 1 --count 3 --ground -o " + Path("boxes.bt"));
   ASSERT_EQ(boxes.exit_code, 0) << boxes.output;
   EXPECT_FALSE(OccupancyMap::Load(Path("boxes.bt")).empty());
 }
@@ -88,8 +87,7 @@ TEST_F(MapCommandTest, InvalidInputExitsWithTwoAndOneLine) {
   const std::string corrupt = Path("corrupt.bt");
   std::ofstream(corrupt) << "# Octomap OcTree binary file\nid OcTree\nsize 5\nres 0.1\ndata\n\x03";
   for (const std::string& args :
-       {"map info " + corrupt, "map info " + Path("missing.bt"),
-        "map slice " + corrupt + " --z 1 -o " + Path("x.png"),
+       {"map info " + corrupt, "map info " + Path("missing.bt"), "map slice " + corrupt + " --z 1 -o " + Path("x.png"),
         "map generate forest --bounds 0 0 0 4 4 0 -o " + Path("flat.bt"),
         "map generate forest --radius-min 0.5 --radius-max 0.1 -o " + Path("r.bt"),
         "map generate boxes -o " + Path("wrong_extension.ot")}) {
@@ -119,8 +117,7 @@ TEST(DefaultMapsTest, CommittedMapsLoadWithTheDocumentedBounds) {
     const char* file;
     Eigen::Vector3d max;
   };
-  for (const Expected& e : {Expected{"forest_20x20.bt", {20, 20, 4}},
-                            Expected{"sharp_turn.bt", {10.2, 5, 3}},
+  for (const Expected& e : {Expected{"forest_20x20.bt", {20, 20, 4}}, Expected{"sharp_turn.bt", {10.2, 5, 3}},
                             Expected{"boxes_20x20.bt", {20, 20, 4}}}) {
     const std::string path = std::string(TIMEOPT_SOURCE_DIR) + "/maps/" + e.file;
     const OccupancyMap map = OccupancyMap::Load(path);

@@ -30,8 +30,7 @@ TEST(MapGeneratorsTest, ForestIsDeterministicAndHasTheRequestedTrees) {
   // Vertical: every layer is the same.
   const int64_t plane = 60 * 50;
   for (int z = 1; z < 20; ++z) {
-    EXPECT_TRUE(std::equal(a.occupied.begin(), a.occupied.begin() + plane,
-                           a.occupied.begin() + z * plane));
+    EXPECT_TRUE(std::equal(a.occupied.begin(), a.occupied.begin() + plane, a.occupied.begin() + z * plane));
   }
   options.min_radius = 0.5;
   options.max_radius = 0.4;

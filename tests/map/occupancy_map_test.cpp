@@ -67,8 +67,7 @@ TEST(OccupancyMapTest, GridSaveLoadRoundTripKeepsEveryVoxel) {
                                 static_cast<int>(i / (int64_t{grid.box.size.x()} * grid.box.size.y())));
     const Eigen::Vector3i index = local + grid.box.min;
     EXPECT_EQ(loaded.IsOccupied(grid.Centre(index)), grid.At(index));
-    EXPECT_EQ(loaded.State(grid.Centre(index)),
-              grid.At(index) ? VoxelState::kOccupied : VoxelState::kFree);
+    EXPECT_EQ(loaded.State(grid.Centre(index)), grid.At(index) ? VoxelState::kOccupied : VoxelState::kFree);
   }
 }
 
@@ -111,8 +110,7 @@ TEST(OccupancyMapTest, LoadsFullOtFilesOfOcTreeAndColorOcTree) {
   EXPECT_EQ(b.source_type(), "ColorOcTree");
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     const Eigen::Vector3d p(it.getX(), it.getY(), it.getZ());
-    const VoxelState expected =
-        tree.isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kFree;
+    const VoxelState expected = tree.isNodeOccupied(*it) ? VoxelState::kOccupied : VoxelState::kFree;
     EXPECT_EQ(a.State(p), expected);
     EXPECT_EQ(b.State(p), expected);
   }
@@ -258,7 +256,10 @@ TEST(OccupancyMapTest, OccupiedVoxelsNearAPathMatchBruteForce) {
   std::set<std::array<long, 3>> found_keys;
   for (const Eigen::Vector3d& c : found) {
     EXPECT_TRUE(map.IsOccupied(c));
-    EXPECT_TRUE(found_keys.insert({std::lround(c.x() / 0.1 - 0.5), std::lround(c.y() / 0.1 - 0.5), std::lround(c.z() / 0.1 - 0.5)}).second)
+    EXPECT_TRUE(
+        found_keys
+            .insert({std::lround(c.x() / 0.1 - 0.5), std::lround(c.y() / 0.1 - 0.5), std::lround(c.z() / 0.1 - 0.5)})
+            .second)
         << "found twice";
   }
   int expected = 0;

@@ -64,8 +64,8 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
       Eigen::Vector3d goal = FreePoint(*f.esdf, &rng, 0.5, 7.0, 9.5);
       const PlanResult plan = planner.Plan(start, goal, options);
       ++trials;
-      ASSERT_TRUE(plan.is_success()) << "seed " << seed << " pair " << pair << ": "
-                                     << ToString(plan.status) << ": " << plan.message;
+      ASSERT_TRUE(plan.is_success()) << "seed " << seed << " pair " << pair << ": " << ToString(plan.status) << ": "
+                                     << plan.message;
       ++successes;
       // The planner's promise: the radius plus half a check step at the samples (a start or goal
       // closer than that lowers it to its own clearance, which these free points exceed).
@@ -101,7 +101,8 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
 // no longer than the 14.573 s it was.
 TEST(Planner, ChordalPiecesRemoveTheHooksOfTheDefaultPlan) {
   const OccupancyMap map = OccupancyMap::Load(std::string(TIMEOPT_SOURCE_DIR) + "/maps/forest_20x20.bt");
-  const Esdf esdf = Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d(-9, -9, -10), Eigen::Vector3d(29, 29, 11)));
+  const Esdf esdf =
+      Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d(-9, -9, -10), Eigen::Vector3d(29, 29, 11)));
   Planner planner(esdf);
   PlannerOptions options;
   options.spatial.max_solver_time_in_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
@@ -135,7 +136,8 @@ TEST(Planner, TheSmoothnessWeightRemovesTheHooksAtFrontEndCorners) {
                         {2, {-0.253391, 1.261093, 1.0}, {-4.200079, -0.723733, 1.0}}};
   double slowest_old = std::numeric_limits<double>::infinity();
   for (const Pair& pair : pairs) {
-    const std::string path = std::string(TIMEOPT_SHARED_DIR) + "/maps/forest_gen/forest" + std::to_string(pair.map) + ".bt";
+    const std::string path =
+        std::string(TIMEOPT_SHARED_DIR) + "/maps/forest_gen/forest" + std::to_string(pair.map) + ".bt";
     if (!std::ifstream(path)) GTEST_SKIP() << "skipped: " << path << " is absent";
     const OccupancyMap map = OccupancyMap::Load(path);
     const Esdf esdf = Esdf::FromMapRegion(map, PlanRegion(pair.start, pair.goal));  // as timeopt plan
@@ -267,8 +269,8 @@ TEST(Planner, AStartInMotionIsFlownFromThatState) {
 // limits within 1% (the flight criterion) and the loop must end at the goal.
 struct LoopOutcome {
   int plans = 0;
-  int moving_starts = 0;   // plans from a state in motion
-  int scaled_starts = 0;   // plans whose start state the planner had to scale (start_scale < 1)
+  int moving_starts = 0;  // plans from a state in motion
+  int scaled_starts = 0;  // plans whose start state the planner had to scale (start_scale < 1)
   bool reached = false;
 };
 
@@ -296,18 +298,18 @@ LoopOutcome FlyReplanningLoop(const ForestFixture& forest, int seed) {
     if (!plan.is_success()) return outcome;
     const Trajectory trajectory(plan.curve, plan.temporal.profile);
     const FeasibilityReport report = QuadrotorSim(flight).Fly(trajectory, options.limits, velocity, acceleration);
-    const bool last = trajectory.duration() <= kCycle ||
-                      (trajectory.Evaluate(kCycle).position - goal).norm() < kNoReplanDistance;
+    const bool last =
+        trajectory.duration() <= kCycle || (trajectory.Evaluate(kCycle).position - goal).norm() < kNoReplanDistance;
     const double horizon = last ? trajectory.duration() : kCycle;
     double worst_velocity = 0.0, worst_acceleration = 0.0;
     SimState at_horizon = report.states.front();
     for (const SimState& state : report.states) {
       if (!last && state.t > horizon + 1e-9) break;
-      worst_velocity = std::max(
-          worst_velocity, (state.velocity.cwiseAbs().array() / options.limits.max_velocity.array()).maxCoeff());
-      worst_acceleration = std::max(
-          worst_acceleration,
-          (state.acceleration.cwiseAbs().array() / options.limits.max_acceleration.array()).maxCoeff());
+      worst_velocity = std::max(worst_velocity,
+                                (state.velocity.cwiseAbs().array() / options.limits.max_velocity.array()).maxCoeff());
+      worst_acceleration =
+          std::max(worst_acceleration,
+                   (state.acceleration.cwiseAbs().array() / options.limits.max_acceleration.array()).maxCoeff());
       at_horizon = state;
     }
     EXPECT_LE(worst_velocity, 1.01) << "plan " << outcome.plans;

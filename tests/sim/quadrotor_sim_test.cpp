@@ -112,7 +112,8 @@ TEST(QuadrotorSim, AccelerationJumpOvershootsAsTheClosedForm) {
     const SimState& s = report.states[k];
     for (int q = 0; q <= 50; ++q) {
       const double tau = kDt * q / 50.0;
-      sampled_v = std::max(sampled_v, std::abs(s.velocity.x() + s.acceleration.x() * tau + 0.5 * s.jerk.x() * tau * tau));
+      sampled_v =
+          std::max(sampled_v, std::abs(s.velocity.x() + s.acceleration.x() * tau + 0.5 * s.jerk.x() * tau * tau));
       sampled_a = std::max(sampled_a, std::abs(s.acceleration.x() + s.jerk.x() * tau));
     }
   }
@@ -218,8 +219,8 @@ TEST(QuadrotorSim, FlyStartsFromTheProblemsBoundaryState) {
   ASSERT_NEAR(trajectory.Evaluate(0.0).acceleration.x(), 1.0, 1e-6);
   QuadrotorSimOptions o = Options();
   o.record_states = true;
-  const FeasibilityReport flown = QuadrotorSim(o).Fly(
-      trajectory, problem.limits, problem.boundary.start_velocity, problem.boundary.start_acceleration);
+  const FeasibilityReport flown = QuadrotorSim(o).Fly(trajectory, problem.limits, problem.boundary.start_velocity,
+                                                      problem.boundary.start_acceleration);
   EXPECT_EQ(flown.states.front().acceleration, Eigen::Vector3d::Zero());
   // The jump from rest to amax at t = 0 overshoots like the others (and by the same closed form).
   EXPECT_NEAR(flown.max_acceleration_ratio, 1.0 + JumpAccelerationOvershoot(), kZohTolerance * 1.0);
@@ -393,8 +394,8 @@ TEST(QuadrotorSim, QuadrotorLimitsMatchTheRecordedStates) {
   ASSERT_TRUE(r.is_success()) << r.message;
   QuadrotorSimOptions options;
   options.record_states = true;
-  const FeasibilityReport f =
-      QuadrotorSim(options).Fly(Trajectory(p.curve, r.profile), p.limits, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  const FeasibilityReport f = QuadrotorSim(options).Fly(Trajectory(p.curve, r.profile), p.limits,
+                                                        Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   ASSERT_TRUE(f.max_speed_ratio && f.max_acceleration_norm_ratio && f.max_thrust_ratio && f.min_thrust_ratio &&
               f.max_tilt_ratio);
   double speed = 0.0, acc = 0.0, thrust_max = 0.0, thrust_min = 1e300, tilt = 0.0, jerk = 0.0;
@@ -429,8 +430,8 @@ TEST(QuadrotorSim, StrayingFromTheReferenceIsNotFeasible) {
   ASSERT_TRUE(r.is_success()) << r.message;
   QuadrotorSimOptions slow;
   slow.bandwidth = 1e-3;
-  const FeasibilityReport f = QuadrotorSim(slow).Fly(Trajectory(p.curve, r.profile), p.limits,
-                                                     Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  const FeasibilityReport f = QuadrotorSim(slow).Fly(Trajectory(p.curve, r.profile), p.limits, Eigen::Vector3d::Zero(),
+                                                     Eigen::Vector3d::Zero());
   EXPECT_LE(f.max_velocity_ratio, 1.0);
   EXPECT_GT(f.max_position_error, 9.0);
   EXPECT_FALSE(f.feasible);

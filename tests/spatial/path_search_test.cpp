@@ -72,8 +72,7 @@ TEST(PathSearch, StatusesNameTheProblem) {
 // The goal's voxel is exempt from both (the search checks the goal point's own clearance instead).
 class SearchGraph {
  public:
-  SearchGraph(const Esdf& esdf, const PathSearchOptions& options)
-      : esdf_(esdf), options_(options) {}
+  SearchGraph(const Esdf& esdf, const PathSearchOptions& options) : esdf_(esdf), options_(options) {}
 
   // The voxel (world index) holding `point`.
   Eigen::Vector3i VoxelOf(const Eigen::Vector3d& point) const {
@@ -89,8 +88,7 @@ class SearchGraph {
     const double d = esdf_.VoxelDistance(to);
     if (d < options_.robot_radius) return std::nullopt;
     const double inflated = options_.robot_radius + options_.clearance_margin;
-    return length * (1.0 + options_.clearance_cost_weight * std::max(0.0, inflated - d) /
-                               options_.clearance_margin);
+    return length * (1.0 + options_.clearance_cost_weight * std::max(0.0, inflated - d) / options_.clearance_margin);
   }
 
   struct Optimum {
@@ -105,8 +103,7 @@ class SearchGraph {
       const Eigen::Vector3i l = v - box.min;
       return l.x() + box.size.x() * (l.y() + box.size.y() * l.z());
     };
-    std::vector<double> cost(static_cast<size_t>(box.num_voxels()),
-                             std::numeric_limits<double>::infinity());
+    std::vector<double> cost(static_cast<size_t>(box.num_voxels()), std::numeric_limits<double>::infinity());
     std::vector<int> steps(cost.size(), 0);
     std::vector<bool> done(cost.size(), false);
     using Entry = std::pair<double, int>;
@@ -118,8 +115,7 @@ class SearchGraph {
       queue.pop();
       if (done[i]) continue;
       done[i] = true;
-      const Eigen::Vector3i v = box.min + Eigen::Vector3i(i % box.size.x(),
-                                                          (i / box.size.x()) % box.size.y(),
+      const Eigen::Vector3i v = box.min + Eigen::Vector3i(i % box.size.x(), (i / box.size.x()) % box.size.y(),
                                                           i / (box.size.x() * box.size.y()));
       if (v == goal) return Optimum{c, steps[i]};
       for (int dz = -1; dz <= 1; ++dz) {
@@ -201,8 +197,8 @@ TEST(PathSearch, VoxelPathIsOptimalAgainstDijkstra) {
     // 16 x 14 x 6 voxels with the box away from the origin (world and local indices differ); every
     // pairing of fill, cost weight and radius over the seeds. Radius 0.4 voxel blocks only
     // occupied voxels, 0.6 also their face neighbours; the soft margin spans 1.5 voxels.
-    const Esdf esdf(RandomGrid(Eigen::Vector3i(-4, 3, -1), Eigen::Vector3i(16, 14, 6), kResolution,
-                               kFill[seed % 3], static_cast<uint64_t>(seed)));
+    const Esdf esdf(RandomGrid(Eigen::Vector3i(-4, 3, -1), Eigen::Vector3i(16, 14, 6), kResolution, kFill[seed % 3],
+                               static_cast<uint64_t>(seed)));
     PathSearchOptions options;
     options.clearance_cost_weight = kCostWeight[seed / 3 % 3];
     options.robot_radius = (seed / 9 % 2 ? 0.6 : 0.4) * kResolution;
@@ -240,8 +236,7 @@ TEST(PathSearch, VoxelPathIsOptimalAgainstDijkstra) {
       ++reachable;
       int steps = 0;
       const double cost = graph.PathCost(exact, &steps);
-      const double tolerance =
-          (4.0 * std::max(steps, optimum->steps) + 2.0) * kFloatRounding * optimum->cost;
+      const double tolerance = (4.0 * std::max(steps, optimum->steps) + 2.0) * kFloatRounding * optimum->cost;
       EXPECT_NEAR(cost, optimum->cost, tolerance) << where;
       if (optimum->cost > LatticeDistance(graph.VoxelOf(start), graph.VoxelOf(goal)) + tolerance) {
         ++detours;
@@ -251,8 +246,7 @@ TEST(PathSearch, VoxelPathIsOptimalAgainstDijkstra) {
       const PathSearchResult weighted = search.Search(start, goal, options);
       ASSERT_TRUE(weighted.is_success()) << where << ": " << weighted.message;
       const double weighted_cost = graph.PathCost(weighted, &steps);
-      const double weighted_tolerance =
-          (4.0 * std::max(steps, optimum->steps) + 2.0) * kFloatRounding * optimum->cost;
+      const double weighted_tolerance = (4.0 * std::max(steps, optimum->steps) + 2.0) * kFloatRounding * optimum->cost;
       EXPECT_GE(weighted_cost, optimum->cost - weighted_tolerance) << where;
       EXPECT_LE(weighted_cost, 1.5 * optimum->cost + weighted_tolerance) << where;
       if (weighted_cost > optimum->cost + weighted_tolerance) ++weighted_suboptimal;
@@ -281,8 +275,8 @@ TEST(PathSearch, VoxelPathIsOptimalAgainstDijkstra) {
   EXPECT_GE(reachable, 120);
   EXPECT_GE(unreachable, 1);
   EXPECT_GE(detours, reachable / 2);
-  std::printf("%d reachable pairs (%d with a detour), %d unreachable; epsilon 1.5 suboptimal in %d\n",
-              reachable, detours, unreachable, weighted_suboptimal);
+  std::printf("%d reachable pairs (%d with a detour), %d unreachable; epsilon 1.5 suboptimal in %d\n", reachable,
+              detours, unreachable, weighted_suboptimal);
 }
 
 }  // namespace

@@ -44,9 +44,8 @@ class PlanCommand : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     // One folder per process: ctest runs each test in its own process, two at a time under -j2.
-    dir_ = (std::filesystem::temp_directory_path() /
-            ("timeopt_plan_command_test_" + std::to_string(::getpid())))
-               .string();
+    dir_ =
+        (std::filesystem::temp_directory_path() / ("timeopt_plan_command_test_" + std::to_string(::getpid()))).string();
     std::filesystem::create_directories(dir_);
     ForestOptions forest;
     forest.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(8, 8, 3));
@@ -80,9 +79,8 @@ std::string PlanCommand::dir_;
 
 TEST_F(PlanCommand, PlansAndWritesTheSamplesAndTheSummary) {
   const std::string csv = dir_ + "/plan.csv", png = dir_ + "/plan.png";
-  const PlanRun run = RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --output " +
-                                 csv + " --plot " + png,
-                             dir_);
+  const PlanRun run =
+      RunPlan("--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --output " + csv + " --plot " + png, dir_);
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   const nlohmann::json summary = nlohmann::json::parse(run.out);
   EXPECT_EQ(summary["status"], "success");
@@ -119,8 +117,7 @@ TEST_F(PlanCommand, BadInputExitsWithTwoAndAOneLineMessage) {
       {"--map " + map() + " --start 0.6,0.6 --goal 7.4,7.4,1.5", "--start: expected x,y,z"},
       {"--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --config " + config,
        "config.spatial.colision_weight: unknown key"},
-      {"--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --config " + negative,
-       "max_velocity"},
+      {"--map " + map() + " --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5 --config " + negative, "max_velocity"},
       {"--map " + dir_ + "/missing.bt --start 0.6,0.6,1.5 --goal 7.4,7.4,1.5", "missing.bt"},
       {"--map " + map() + " --goal 7.4,7.4,1.5", "--start and --goal are required"},
   };

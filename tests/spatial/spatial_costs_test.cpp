@@ -78,8 +78,8 @@ TEST(QuadraticFormCost, JerkResidualsSquareToTheExactIntegral) {
     const spatial_internal::QuadraticFormCost length(h.Factor(1), scale, 3.0);
     std::vector<double> x0 = RandomJoint(&rng, 2.0), x1 = RandomJoint(&rng, 2.0);
     const double* parameters[] = {x0.data(), x1.data()};
-    const PolynomialPiece piece(PolynomialPiece::Coefficients(
-        spatial_internal::PieceData(x0.data(), x1.data(), scale) * h.monomials().transpose()));
+    const PolynomialPiece piece(PolynomialPiece::Coefficients(spatial_internal::PieceData(x0.data(), x1.data(), scale) *
+                                                              h.monomials().transpose()));
     std::vector<double> r(jerk.num_residuals());
     ASSERT_TRUE(jerk.Evaluate(parameters, r.data(), nullptr));
     double sum = 0.0;
@@ -139,8 +139,7 @@ TEST(CollisionCost, GradientCheck) {
   penalty.safe_distance = 12.0;
   penalty.decay_length = 2.0;
   for (double duration : {1.0, 1.7}) {
-    const spatial_internal::CollisionCost cost(&field, penalty, 8,
-                                               spatial_internal::PieceScale(duration), 2.0, 1e-3);
+    const spatial_internal::CollisionCost cost(&field, penalty, 8, spatial_internal::PieceScale(duration), 2.0, 1e-3);
     CheckGradient(cost, 1.0, 21);
   }
 }

@@ -48,10 +48,8 @@ TEST(SpatialOptimizer, ReportedCostNeverIncreasesAndCollisionDrops) {
       }
       // The record and the breakdown agree on the start and end cost (Ceres' own evaluation,
       // summation order differs: 1e-9 relative).
-      EXPECT_NEAR(result.iterations.front().cost, result.initial_cost.total(),
-                  1e-9 * result.initial_cost.total());
-      EXPECT_NEAR(result.iterations.back().cost, result.final_cost.total(),
-                  1e-9 * result.final_cost.total());
+      EXPECT_NEAR(result.iterations.front().cost, result.initial_cost.total(), 1e-9 * result.initial_cost.total());
+      EXPECT_NEAR(result.iterations.back().cost, result.final_cost.total(), 1e-9 * result.final_cost.total());
       EXPECT_LE(result.final_cost.collision, result.initial_cost.collision);
       EXPECT_EQ(result.curve.num_pieces(), joints.cols() - 1);
       if (formulation == SpatialFormulation::kSpatial) {
@@ -78,8 +76,8 @@ TEST(SpatialOptimizer, StraightLineInFreeSpaceStaysStraight) {
   // Far from every obstacle only jerk and length act; their optimum for rest-to-rest ends and
   // evenly split joints is the straight line (by symmetry the deviation is zero).
   const ForestFixture f(5, 0.01);
-  const Waypoints joints = SplitSegments(
-      (Waypoints(3, 2) << Eigen::Vector3d(-50, -50, 20), Eigen::Vector3d(-45, -47, 20)).finished(), 1.0);
+  const Waypoints joints =
+      SplitSegments((Waypoints(3, 2) << Eigen::Vector3d(-50, -50, 20), Eigen::Vector3d(-45, -47, 20)).finished(), 1.0);
   const SpatialResult result = OptimizeSpatialCurve(*f.esdf, joints, {});
   ASSERT_TRUE(result.is_usable()) << result.message;
   const Eigen::Vector3d a = joints.col(0), b = joints.col(joints.cols() - 1);

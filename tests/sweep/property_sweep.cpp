@@ -134,8 +134,8 @@ Case MakeCase(std::uint64_t seed, int index, const Settings& settings) {
   if (mode == 1) p.constraint_mode = ConstraintMode::kCertified;
   if (mode == 2) {
     const double j = scale * LogUniform(rng, 0.1, 10.0);
-    p.limits.max_jerk = Eigen::Vector3d(j * (1.0 + 0.5 * unit(rng)), j * (1.0 + 0.5 * unit(rng)),
-                                        j * (1.0 + 0.5 * unit(rng)));
+    p.limits.max_jerk =
+        Eigen::Vector3d(j * (1.0 + 0.5 * unit(rng)), j * (1.0 + 0.5 * unit(rng)), j * (1.0 + 0.5 * unit(rng)));
   }
   // Boundary speeds along the tangent (half the problems at rest), up to 1.3 x the lowest speed
   // limit, so that some cannot be flown.
@@ -146,7 +146,12 @@ Case MakeCase(std::uint64_t seed, int index, const Settings& settings) {
 
   char text[256];
   std::snprintf(text, sizeof(text), "%s, %s, m=%d, K=%d, step %.3g m, v %.3g, a %.3g%s, v0 %.3g, v1 %.3g",
-                mode == 0 ? "paper" : mode == 1 ? "certified" : "jerk", kind == 0 ? "cubic" : kind == 1 ? "minjerk" : "polyline",
+                mode == 0   ? "paper"
+                : mode == 1 ? "certified"
+                            : "jerk",
+                kind == 0   ? "cubic"
+                : kind == 1 ? "minjerk"
+                            : "polyline",
                 pieces, K, size, v, a,
                 p.limits.max_jerk ? (", j " + std::to_string(p.limits.max_jerk->minCoeff())).c_str() : "",
                 p.boundary.start_velocity.norm(), p.boundary.end_velocity.norm());
@@ -177,8 +182,7 @@ std::string PhysicalInfeasibility(const TemporalProblem& p) {
     if (i + 1 < m) {
       const Eigen::Vector3d out = p.curve.Evaluate(i, 1.0, 1), in = p.curve.Evaluate(i + 1, 0.0, 1);
       const double angle = std::atan2(out.cross(in).norm(), out.dot(in));
-      if (out.norm() <= p.zero_tangent_tolerance || in.norm() <= p.zero_tangent_tolerance ||
-          angle > 1e-3) {
+      if (out.norm() <= p.zero_tangent_tolerance || in.norm() <= p.zero_tangent_tolerance || angle > 1e-3) {
         fixed.emplace_back(along, 0.0);  // a kink (well above parallel_tolerance): a stop
       }
     }
@@ -297,8 +301,7 @@ std::string CheckOptimal(const TemporalProblem& p, const TemporalResult& r) {
         return text;
       }
       if (p.limits.max_jerk) {
-        const Eigen::Vector3d jerk =
-            d1 * q.sdddot + 3.0 * d2 * q.sdot * q.sddot + d3 * q.sdot * q.sdot * q.sdot;
+        const Eigen::Vector3d jerk = d1 * q.sdddot + 3.0 * d2 * q.sdot * q.sddot + d3 * q.sdot * q.sdot * q.sdot;
         if (over(jerk, *p.limits.max_jerk)) {
           std::snprintf(text, sizeof(text), "jerk limit exceeded at piece %d s=%.6f: |j|/jmax %.9g", i, s,
                         jerk.cwiseQuotient(*p.limits.max_jerk).cwiseAbs().maxCoeff());
@@ -319,7 +322,9 @@ std::string ProblemJson(const TemporalProblem& p) {
     std::snprintf(number, sizeof(number), "%.17g", x);
     return std::string(number);
   };
-  const auto vec = [&](const Eigen::Vector3d& v) { return "[" + num(v(0)) + ", " + num(v(1)) + ", " + num(v(2)) + "]"; };
+  const auto vec = [&](const Eigen::Vector3d& v) {
+    return "[" + num(v(0)) + ", " + num(v(1)) + ", " + num(v(2)) + "]";
+  };
   for (int i = 0; i < p.curve.num_pieces(); ++i) {
     const PolynomialPiece::Coefficients& c = p.curve.piece(i).coefficients();
     out += i == 0 ? "{" : ", {";
@@ -334,8 +339,9 @@ std::string ProblemJson(const TemporalProblem& p) {
          ", \"max_acceleration\": " + vec(p.limits.max_acceleration);
   if (p.limits.max_jerk) out += ", \"max_jerk\": " + vec(*p.limits.max_jerk);
   out += "}, \"boundary\": {\"start_velocity\": " + vec(p.boundary.start_velocity) +
-         ", \"end_velocity\": " + vec(p.boundary.end_velocity) + "}, \"discretization\": {\"K\": " +
-         std::to_string(p.cells_per_piece) + "}, \"constraint_mode\": \"" + ToString(p.constraint_mode) + "\"}\n";
+         ", \"end_velocity\": " + vec(p.boundary.end_velocity) +
+         "}, \"discretization\": {\"K\": " + std::to_string(p.cells_per_piece) + "}, \"constraint_mode\": \"" +
+         ToString(p.constraint_mode) + "\"}\n";
   return out;
 }
 
@@ -356,8 +362,8 @@ struct Totals {
   std::map<std::string, int> outcomes;  // "mode: socp/ipopt status"
   double worst_convex_gap = 0.0, worst_jerk_above = 0.0, worst_ipopt_above = 0.0, slowest = 0.0;
   int slowest_index = -1;
-  int known = 0;       // failing problems of the --known list
-  int unresolved = 0;  // no answer (jerk-limited), or an infeasible verdict nothing confirms
+  int known = 0;        // failing problems of the --known list
+  int unresolved = 0;   // no answer (jerk-limited), or an infeasible verdict nothing confirms
   int ipopt_loose = 0;  // paper/certified: Ipopt off, a referee (Ipopt at 1e-13 or the conic solver) agreeing
   int confirmed_by_both = 0, confirmed_by_physics = 0, ipopt_capped = 0;
 };
@@ -443,7 +449,8 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
         // A status, not an answer: a failure of the paper's and certified rows (convex, solved
         // exactly); on the jerk-limited rows the known limit of the SCP (long, slow pieces whose
         // jerk ramps are a tiny fraction of T), counted apart.
-        (p.limits.max_jerk ? unresolved : failures).push_back(name + " ended " + ToString(r->status) + ": " + r->message);
+        (p.limits.max_jerk ? unresolved : failures)
+            .push_back(name + " ended " + ToString(r->status) + ": " + r->message);
         continue;
       }
       if (r->status != TemporalStatus::kOptimal) continue;
@@ -461,7 +468,8 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
       const std::string name = r == &socp ? "socp" : "ipopt";
       const TemporalResult& other = r == &socp ? ipopt : socp;
       if (r == &socp ? ipopt_ok : socp_ok) {
-        failures.push_back(name + " reports infeasible (" + r->message + ") but the other backend's answer holds every limit");
+        failures.push_back(name + " reports infeasible (" + r->message +
+                           ") but the other backend's answer holds every limit");
       } else if (other.status == TemporalStatus::kInfeasible && !skipped_ipopt) {
         ++totals.confirmed_by_both;
       } else if ((p.constraint_mode == ConstraintMode::kCertified || p.limits.max_jerk) &&
@@ -509,11 +517,12 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
             gap = (socp.total_time - (close(referee) ? referee : conic).total_time) / socp.total_time;
           } else {
             char text[240];
-            std::snprintf(text, sizeof(text),
-                          "T differs: socp %.12g, ipopt %.12g (relative %.3g; ipopt at 1e-13: %s %.12g; conic solver alone: "
-                          "%s %.12g)",
-                          socp.total_time, ipopt.total_time, gap, ToString(referee.status), referee.total_time,
-                          ToString(conic.status), conic.total_time);
+            std::snprintf(
+                text, sizeof(text),
+                "T differs: socp %.12g, ipopt %.12g (relative %.3g; ipopt at 1e-13: %s %.12g; conic solver alone: "
+                "%s %.12g)",
+                socp.total_time, ipopt.total_time, gap, ToString(referee.status), referee.total_time,
+                ToString(conic.status), conic.total_time);
             failures.push_back(text);
           }
         }
@@ -571,18 +580,20 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
     std::fflush(stdout);
   }
   const double total = std::chrono::duration<double>(Clock::now() - sweep_start).count();
-  std::printf("property sweep: problems %d..%d (seed %llu), %d failed, %d known failures, %d unresolved, %.1f s "
-              "(slowest: problem %d, %.2f s)\n",
-              first, first + count - 1, static_cast<unsigned long long>(seed), totals.failures, totals.known,
-              totals.unresolved, total,
-              totals.slowest_index, totals.slowest);
-  std::printf("largest T difference of the backends: paper and certified %.3g; jerk-limited socp above ipopt %.3g, "
-              "ipopt above socp %.3g\n",
-              totals.worst_convex_gap, totals.worst_jerk_above, totals.worst_ipopt_above);
-  std::printf("infeasible verdicts confirmed by both backends %d, by a physical bound %d; Ipopt stopped at its "
-              "%.0f s cap %d times; Ipopt off by more than 1e-6 and a referee agreeing with us %d times\n",
-              totals.confirmed_by_both, totals.confirmed_by_physics, settings.ipopt_seconds, totals.ipopt_capped,
-              totals.ipopt_loose);
+  std::printf(
+      "property sweep: problems %d..%d (seed %llu), %d failed, %d known failures, %d unresolved, %.1f s "
+      "(slowest: problem %d, %.2f s)\n",
+      first, first + count - 1, static_cast<unsigned long long>(seed), totals.failures, totals.known, totals.unresolved,
+      total, totals.slowest_index, totals.slowest);
+  std::printf(
+      "largest T difference of the backends: paper and certified %.3g; jerk-limited socp above ipopt %.3g, "
+      "ipopt above socp %.3g\n",
+      totals.worst_convex_gap, totals.worst_jerk_above, totals.worst_ipopt_above);
+  std::printf(
+      "infeasible verdicts confirmed by both backends %d, by a physical bound %d; Ipopt stopped at its "
+      "%.0f s cap %d times; Ipopt off by more than 1e-6 and a referee agreeing with us %d times\n",
+      totals.confirmed_by_both, totals.confirmed_by_physics, settings.ipopt_seconds, totals.ipopt_capped,
+      totals.ipopt_loose);
   for (const auto& [outcome, n] : totals.outcomes) std::printf("  %-40s %d\n", outcome.c_str(), n);
   std::printf("digest %016llx\n", static_cast<unsigned long long>(digest));
   return totals.failures == 0 ? 0 : 1;
@@ -634,10 +645,15 @@ int main(int argc, char** argv) {
       }
     } else if (target != nullptr && i + 1 < argc &&
                timeopt::ParseInt(argv[i + 1], arg == "--ipopt-seconds" || arg == "--max-jerk-cells" ? 1 : 0,
-                                 arg == "--count" ? 10000000 : arg == "--max-jerk-cells" ? 500 : (1LL << 40), target)) {
+                                 arg == "--count"            ? 10000000
+                                 : arg == "--max-jerk-cells" ? 500
+                                                             : (1LL << 40),
+                                 target)) {
       ++i;
     } else {
-      std::fprintf(stderr, "timeopt_property_sweep: bad argument '%s' (usage: [--first N] [--count N] [--seed S] [--ipopt-seconds S] [--max-jerk-cells K] [--verbose] [--dump DIR] [--known I,J,...])\n",
+      std::fprintf(stderr,
+                   "timeopt_property_sweep: bad argument '%s' (usage: [--first N] [--count N] [--seed S] "
+                   "[--ipopt-seconds S] [--max-jerk-cells K] [--verbose] [--dump DIR] [--known I,J,...])\n",
                    arg.c_str());
       return 2;
     }

@@ -20,9 +20,7 @@ using test_support::Segment;
 using test_support::WalkProblem;
 
 // A random walk from the origin.
-Waypoints Walk(std::mt19937& rng, int count) {
-  return RandomWalk(rng, count, Eigen::Vector3d::Zero());
-}
+Waypoints Walk(std::mt19937& rng, int count) { return RandomWalk(rng, count, Eigen::Vector3d::Zero()); }
 
 TemporalProblem Problem(const PiecewiseCurve& curve, int K, ConstraintMode mode) {
   TemporalProblem p = WalkProblem(curve, K);
@@ -35,8 +33,7 @@ class Certified : public ::testing::TestWithParam<TemporalBackend> {
   TemporalResult Solve(const TemporalProblem& p) { return MakeTemporalSolver(GetParam())->Solve(p); }
 };
 
-INSTANTIATE_TEST_SUITE_P(Temporal, Certified,
-                         ::testing::Values(TemporalBackend::kSocp, TemporalBackend::kIpopt),
+INSTANTIATE_TEST_SUITE_P(Temporal, Certified, ::testing::Values(TemporalBackend::kSocp, TemporalBackend::kIpopt),
                          [](const auto& info) { return std::string(ToString(info.param)); });
 
 // The dense check samples the exact trajectory 33 times per cell. In certified mode every
@@ -79,8 +76,8 @@ TEST_P(Certified, CostsLittleAndTheGapShrinksWithK) {
 // On a straight line f'' = 0 and f' is constant, so certified rows coincide with the paper's and
 // the closed form T = L/v + v/a = 7 is reproduced (switch points on the grid for K multiple of 5).
 TEST_P(Certified, StraightLineMatchesClosedForm) {
-  TemporalProblem p = Problem(Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 0, 0)), 20,
-                              ConstraintMode::kCertified);
+  TemporalProblem p =
+      Problem(Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 0, 0)), 20, ConstraintMode::kCertified);
   p.limits.max_velocity.setConstant(2.0);
   p.limits.max_acceleration.setConstant(1.0);
   const TemporalResult r = Solve(p);
@@ -168,8 +165,8 @@ TEST(CertifiedThinning, ImpliesTheExactRowsAndCostsAtMostHalfTheTolerance) {
   int only_exact = 0;  // points that only the exact rows allow, over all curves
   for (int c = 0; c < 4; ++c) {
     const Waypoints w = Walk(rng, 5);
-    TemporalProblem thin = Problem(c % 2 ? MinimumJerkSpline(w) : NaturalCubicSpline(w), 20,
-                                   ConstraintMode::kCertified);
+    TemporalProblem thin =
+        Problem(c % 2 ? MinimumJerkSpline(w) : NaturalCubicSpline(w), 20, ConstraintMode::kCertified);
     thin.certified_thinning = 1e-3;  // larger than the default, so that the effect is measurable
     TemporalProblem exact = thin;
     exact.certified_thinning = 0.0;

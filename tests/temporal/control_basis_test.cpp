@@ -161,7 +161,8 @@ TEST(ControlBasis, EveryProfileOfTheControlsMeetsTheEqualityRows) {
           size[var] = mv;
           continue;
         }
-        EXPECT_NEAR(xv, x[var], 1e-12 * std::max(mv, size[var])) << "trial " << trial << ", var " << v.var << ", grid " << g;
+        EXPECT_NEAR(xv, x[var], 1e-12 * std::max(mv, size[var]))
+            << "trial " << trial << ", var " << v.var << ", grid " << g;
         size[var] = std::max(size[var], mv);
       }
       for (int var = 0; var < d.num_vars; ++var) ASSERT_TRUE(seen[static_cast<size_t>(var)]) << "var " << var;

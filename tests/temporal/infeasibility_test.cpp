@@ -15,9 +15,9 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::LinearPiece;
 using test_support::LineProblem;
+using ::testing::HasSubstr;
 
 // A straight run of `run` metres along x into a right-angle corner (the vehicle stops there), then
 // 3 m along y; vmax 2, amax 1, starting at `speed` along x.
@@ -159,7 +159,7 @@ TEST(Infeasibility, JerkLimitedStartTooFastToStopIsScaledToTheClosedForm) {
   EXPECT_GE(lambda, v / 3.0 - kStartScaleTolerance - 1e-4);
   EXPECT_LE(lambda, v / 3.0 + 1e-3);
   EXPECT_NEAR(r.boundary_relaxation->start_speed, 3.0 * lambda, 1e-12);  // the same number, scaled
-  EXPECT_EQ(r.boundary_relaxation->start_acceleration, "scaled");  // no braking given to keep
+  EXPECT_EQ(r.boundary_relaxation->start_acceleration, "scaled");        // no braking given to keep
   EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
   EXPECT_EQ(r.message.rfind("boundary relaxed: start state scaled by", 0), 0u) << r.message;
 }

@@ -24,13 +24,13 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
-using test_support::LineProblem;
 using test_support::LinearPiece;
+using test_support::LineProblem;
+using ::testing::HasSubstr;
 
 // Cubic Hermite piece from p0 to p1 with tangents t0, t1 (in s).
-PolynomialPiece Hermite(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
-                        const Eigen::Vector3d& t0, const Eigen::Vector3d& t1) {
+PolynomialPiece Hermite(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& t0,
+                        const Eigen::Vector3d& t1) {
   PolynomialPiece::Coefficients c(3, 4);
   c.col(0) = p0;
   c.col(1) = t0;
@@ -48,8 +48,7 @@ TemporalProblem RandomG1Problem(std::mt19937& rng, int K, double rho) {
   const Eigen::Vector3d p0 = rv(), p1 = rv(), p2 = rv(), p3 = rv();
   const Eigen::Vector3d t0 = rv(), t1 = rv(), t2 = rv(), t3 = rv();
   TemporalProblem p;
-  p.curve = PiecewiseCurve({Hermite(p0, p1, t0, t1), Hermite(p1, p2, 0.5 * t1, t2),
-                            Hermite(p2, p3, 1.7 * t2, t3)});
+  p.curve = PiecewiseCurve({Hermite(p0, p1, t0, t1), Hermite(p1, p2, 0.5 * t1, t2), Hermite(p2, p3, 1.7 * t2, t3)});
   p.limits.max_velocity = Eigen::Vector3d(2.0, 3.0, 2.5);
   p.limits.max_acceleration = Eigen::Vector3d(1.0, 1.5, 2.0);
   p.boundary.start_velocity = 0.1 * t0;
@@ -73,18 +72,16 @@ std::vector<double> Gradient(IpoptTemporalNlp& nlp, const std::vector<double>& x
 // The dense symmetric Hessian of the Lagrangian from the NLP's lower triangle, with the given
 // objective factor and non-zero constraint multipliers (which must not matter: rows are linear;
 // the exact jerk rows, whose multipliers do, have their own test below).
-Eigen::MatrixXd DenseHessian(IpoptTemporalNlp& nlp, const std::vector<double>& x,
-                             double obj_factor) {
+Eigen::MatrixXd DenseHessian(IpoptTemporalNlp& nlp, const std::vector<double>& x, double obj_factor) {
   Ipopt::Index n = 0, m = 0, nnz_jac = 0, nnz_h = 0;
   Ipopt::TNLP::IndexStyleEnum style;
   EXPECT_TRUE(nlp.get_nlp_info(n, m, nnz_jac, nnz_h, style));
   std::vector<Ipopt::Index> rows(static_cast<size_t>(nnz_h)), cols(static_cast<size_t>(nnz_h));
-  EXPECT_TRUE(nlp.eval_h(n, x.data(), true, obj_factor, m, nullptr, true, nnz_h, rows.data(),
-                         cols.data(), nullptr));
+  EXPECT_TRUE(nlp.eval_h(n, x.data(), true, obj_factor, m, nullptr, true, nnz_h, rows.data(), cols.data(), nullptr));
   std::vector<double> lambda(static_cast<size_t>(m), 3.0);
   std::vector<double> values(static_cast<size_t>(nnz_h));
-  EXPECT_TRUE(nlp.eval_h(n, x.data(), true, obj_factor, m, lambda.data(), true, nnz_h, nullptr,
-                         nullptr, values.data()));
+  EXPECT_TRUE(
+      nlp.eval_h(n, x.data(), true, obj_factor, m, lambda.data(), true, nnz_h, nullptr, nullptr, values.data()));
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
   std::set<std::pair<int, int>> seen;
   for (size_t e = 0; e < values.size(); ++e) {
@@ -104,15 +101,15 @@ constexpr double kFiniteDifferenceTolerance = 1e-6;
 
 // Checks the NLP's objective, gradient and Hessian (lower triangle, no duplicates, constraint
 // multipliers ignored, scaled by obj_factor) at x against central differences.
-void ExpectDerivativesMatchFiniteDifferences(const TemporalDiscretization& d,
-                                             const std::vector<double>& x) {
+void ExpectDerivativesMatchFiniteDifferences(const TemporalDiscretization& d, const std::vector<double>& x) {
   IpoptTemporalNlp nlp(d);
   const int n = d.num_vars;
   ASSERT_EQ(static_cast<int>(x.size()), n);
   // The objective is the discretization's own (same sums up to rounding: 1e-12 relative), times
   // the NLP's scale.
   ASSERT_TRUE(std::isfinite(nlp.objective_scale()) && nlp.objective_scale() > 0.0);
-  EXPECT_NEAR(Objective(nlp, x), nlp.objective_scale() * d.Objective(x), 1e-12 * nlp.objective_scale() * d.Objective(x));
+  EXPECT_NEAR(Objective(nlp, x), nlp.objective_scale() * d.Objective(x),
+              1e-12 * nlp.objective_scale() * d.Objective(x));
 
   const std::vector<double> g = Gradient(nlp, x);
   std::vector<double> g_fd(static_cast<size_t>(n));
@@ -165,8 +162,7 @@ TEST(IpoptTemporalNlp, CellWithBothEndsOnOneVariable) {
   d.cells_per_piece = 3;
   d.rho = 0.4;
   d.num_vars = 2;
-  d.grid = {GridValue{0, 1.0, 0.0}, GridValue{0, 2.5, 0.0}, GridValue{1, 0.5, 0.0},
-            GridValue{-1, 1.0, 0.0}};
+  d.grid = {GridValue{0, 1.0, 0.0}, GridValue{0, 2.5, 0.0}, GridValue{1, 0.5, 0.0}, GridValue{-1, 1.0, 0.0}};
   d.cells = {Cell{0, 0, 1.0 / 3}, Cell{0, 1, 1.0 / 3}, Cell{0, 2, 1.0 / 3}};
   d.var_upper = {std::numeric_limits<double>::infinity(), 1.0};
   ExpectDerivativesMatchFiniteDifferences(d, {0.3, 0.7});

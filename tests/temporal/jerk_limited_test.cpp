@@ -26,8 +26,8 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::Segment;
+using ::testing::HasSubstr;
 
 // Rest-to-rest time along a line of length L with speed, acceleration and jerk limits v, a, j
 // (the S-curve): each half accelerates to a peak speed vp and the rest cruises. Accelerating to
@@ -78,8 +78,7 @@ TEST(JerkLimited, LinesAreWithinTheTargetsOfTheSCurveAndNeverBelow) {
   const double c = 1.0 / std::sqrt(3.0);
   const Case cases[] = {
       {Eigen::Vector3d(10.0, 0.0, 0.0), 4.0, 3.0, 10.0, SCurveTime(10.0, 4.0, 3.0, 10.0)},
-      {Eigen::Vector3d(10.0, 10.0, 10.0) * c, 4.0 * c, 3.0 * c, 10.0 * c,
-       SCurveTime(10.0, 4.0, 3.0, 10.0)},
+      {Eigen::Vector3d(10.0, 10.0, 10.0) * c, 4.0 * c, 3.0 * c, 10.0 * c, SCurveTime(10.0, 4.0, 3.0, 10.0)},
       {Eigen::Vector3d(0.0, 2.0, 0.0), 4.0, 3.0, 10.0, SCurveTime(2.0, 4.0, 3.0, 10.0)},
       {Eigen::Vector3d(0.0, 0.0, 0.5), 4.0, 3.0, 10.0, SCurveTime(0.5, 4.0, 3.0, 10.0)},
   };
@@ -125,15 +124,15 @@ TEST(JerkLimited, DenseSamplesRespectEveryLimitAndAccelerationIsContinuous) {
         const Eigen::Vector3d change = samples[i + 1].acceleration - s.acceleration;
         for (int a = 0; a < 3; ++a) {
           // |change| <= jmax h: the mean of the jerk over the step is within the limit.
-          EXPECT_LE(std::abs(change(a)), (*p.limits.max_jerk)(a) * h * (1.0 + 1e-6) + 1e-12);
+          EXPECT_LE(std::abs(change(a)), (*p.limits.max_jerk)(a)*h * (1.0 + 1e-6) + 1e-12);
         }
         if (i > 0 && h > 0.5 * dt) {
           // The central difference of the acceleration is the mean jerk over [t_{i-1}, t_{i+1}],
           // which lies within the jerk's range there. The jerk may jump where two cells meet (its
           // da/ds factor does), so the range is that of the three samples, widened by 1% of jmax
           // for the jerk's smooth change between samples (at most 1e3 m/s^4 x 1 ms here).
-          const Eigen::Vector3d fd = (samples[i + 1].acceleration - samples[i - 1].acceleration) /
-                                     (samples[i + 1].t - samples[i - 1].t);
+          const Eigen::Vector3d fd =
+              (samples[i + 1].acceleration - samples[i - 1].acceleration) / (samples[i + 1].t - samples[i - 1].t);
           for (int a = 0; a < 3; ++a) {
             const double lo = std::min({samples[i - 1].jerk(a), s.jerk(a), samples[i + 1].jerk(a)});
             const double hi = std::max({samples[i - 1].jerk(a), s.jerk(a), samples[i + 1].jerk(a)});
@@ -175,7 +174,8 @@ TEST(JerkLimited, EveryIterateIsJerkFeasibleAndTNeverIncreases) {
     for (double t : r.scp_history) EXPECT_GE(t, lower.total_time * (1.0 - 1e-3));
     // The answer is the best solve; on the structured path the first one (a looser linearization
     // point) is never it.
-    const auto first = r.scp_history.size() > 1 && r.method == "structured" ? r.scp_history.begin() + 1 : r.scp_history.begin();
+    const auto first =
+        r.scp_history.size() > 1 && r.method == "structured" ? r.scp_history.begin() + 1 : r.scp_history.begin();
     EXPECT_NEAR(r.total_time, *std::min_element(first, r.scp_history.end()), 1e-12 * r.total_time);
   }
 }
@@ -266,8 +266,8 @@ TEST(JerkLimited, TheSimulatedQuadrotorHoldsTheLimitsWithinOnePercent) {
     p.limits.max_jerk = Eigen::Vector3d(6.0, 6.0, 4.0);
     const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
     ASSERT_TRUE(r.is_success()) << r.message;
-    const FeasibilityReport flight = QuadrotorSim().Fly(Trajectory(p.curve, r.profile), p.limits,
-                                                        Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    const FeasibilityReport flight =
+        QuadrotorSim().Fly(Trajectory(p.curve, r.profile), p.limits, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     EXPECT_LE(flight.max_velocity_ratio, 1.01);
     EXPECT_LE(flight.max_acceleration_ratio, 1.01);
   }
@@ -409,13 +409,15 @@ TEST(JerkLimited, AnInfeasibleLinearizationIsNotACertificate) {
 // and T falls toward the closed form as K grows (above it: the grid is conservative).
 TEST(JerkLimited, TooFewCellsAreInvalidInputNamingTheSmallestK) {
   for (const int K : {1, 2}) {
-    const TemporalResult r = MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
+    const TemporalResult r =
+        MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
     EXPECT_EQ(r.status, TemporalStatus::kInvalidInput) << K;
     EXPECT_THAT(r.message, HasSubstr("discretization.K: a jerk-limited problem needs at least 3 cells per piece"));
   }
   double previous = std::numeric_limits<double>::infinity();
   for (const int K : {3, 10, 50}) {
-    const TemporalResult r = MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
+    const TemporalResult r =
+        MakeSocpTemporalSolver()->Solve(JerkLine(Eigen::Vector3d(5.0, 0.0, 0.0), 2.0, 2.0, 10.0, K));
     ASSERT_EQ(r.status, TemporalStatus::kOptimal) << K;
     EXPECT_LT(r.total_time, previous) << K;
     EXPECT_LT(r.total_time, 2.5 * 3.7) << K;

@@ -20,16 +20,15 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::Segment;
+using ::testing::HasSubstr;
 
 constexpr double kNone = std::numeric_limits<double>::infinity();
 constexpr double kG = 9.81;
 
 // A rest-to-rest line with only the quadrotor limits that `set` gives (no per-axis ones).
 template <typename Set>
-TemporalProblem QuadLine(const Eigen::Vector3d& from, const Eigen::Vector3d& to, int K, ConstraintMode mode,
-                         Set set) {
+TemporalProblem QuadLine(const Eigen::Vector3d& from, const Eigen::Vector3d& to, int K, ConstraintMode mode, Set set) {
   TemporalProblem p;
   p.curve = Segment(from, to);
   p.limits.max_velocity.setConstant(kNone);
@@ -54,16 +53,20 @@ std::vector<LineCase> LineCases(ConstraintMode mode) {
   std::vector<LineCase> cases;
   // 20 m along (1,1,1), speed 2, acceleration norm 1: 2 s and 2 m at each end, T = L / 2 + 2. The
   // switch points are at s = 0.1 and 0.9.
-  cases.push_back({"diagonal", QuadLine(Eigen::Vector3d::Zero(), 20.0 * diagonal, 50, mode, [](VehicleLimits* l) {
-                     l->max_speed = 2.0;
-                     l->max_acceleration_norm = 1.0;
-                   }),
+  cases.push_back({"diagonal",
+                   QuadLine(Eigen::Vector3d::Zero(), 20.0 * diagonal, 50, mode,
+                            [](VehicleLimits* l) {
+                              l->max_speed = 2.0;
+                              l->max_acceleration_norm = 1.0;
+                            }),
                    20.0 / 2.0 + 2.0, true});
   // 10 m along x, speed 2, tilt 0.1 rad: the horizontal acceleration is at most g tan(0.1).
-  cases.push_back({"tilt", QuadLine(Eigen::Vector3d::Zero(), Eigen::Vector3d(10.0, 0.0, 0.0), 50, mode, [](VehicleLimits* l) {
-                     l->max_speed = 2.0;
-                     l->max_tilt = 0.1;
-                   }),
+  cases.push_back({"tilt",
+                   QuadLine(Eigen::Vector3d::Zero(), Eigen::Vector3d(10.0, 0.0, 0.0), 50, mode,
+                            [](VehicleLimits* l) {
+                              l->max_speed = 2.0;
+                              l->max_tilt = 0.1;
+                            }),
                    10.0 / 2.0 + 2.0 / (kG * std::tan(0.1)), false});
   // A 10 m climb, speed 2, thrust in [g - 1, g + 2]: up at 2 (1 s, 1 m), brake at 1 (2 s, 2 m):
   // T = 1 + 3.5 + 2 = 6.5. Switch points at s = 0.1 and 0.8.
@@ -72,9 +75,11 @@ std::vector<LineCase> LineCases(ConstraintMode mode) {
     l->max_thrust = kG + 2.0;
     l->min_thrust = kG - 1.0;
   };
-  cases.push_back({"climb", QuadLine(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 0.0, 10.0), 50, mode, thrust), 6.5, true});
+  cases.push_back(
+      {"climb", QuadLine(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 0.0, 10.0), 50, mode, thrust), 6.5, true});
   // The same line downwards: it brakes at 2 and starts down at 1, T = 6.5 again.
-  cases.push_back({"descent", QuadLine(Eigen::Vector3d(0.0, 0.0, 10.0), Eigen::Vector3d::Zero(), 50, mode, thrust), 6.5, true});
+  cases.push_back(
+      {"descent", QuadLine(Eigen::Vector3d(0.0, 0.0, 10.0), Eigen::Vector3d::Zero(), 50, mode, thrust), 6.5, true});
   return cases;
 }
 
@@ -188,8 +193,8 @@ TEST(QuadrotorLimits, JerkLimitedClimbHoldsEveryLimit) {
 
 TEST(QuadrotorLimits, BadLimitsAreNamed) {
   const auto solve_with = [](const std::string& limits_json) {
-    const std::string text = R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]}, "limits": )" +
-                             limits_json + "}";
+    const std::string text =
+        R"({"curve": {"pieces": [{"x": [0, 10], "y": [0, 0], "z": [0, 0]}]}, "limits": )" + limits_json + "}";
     try {
       return MakeSocpTemporalSolver()->Solve(ParseTemporalProblemJson(text));
     } catch (const std::invalid_argument& e) {

@@ -18,8 +18,8 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::Segment;
+using ::testing::HasSubstr;
 
 constexpr double kNone = std::numeric_limits<double>::infinity();
 
@@ -61,7 +61,8 @@ TEST(Reliability, LimitsThatCannotBindLeaveTheAnswerWithoutThem) {
       TemporalProblem velocity = Line(1e300, 3.0, std::nullopt, 50, mode);
       for (const TemporalProblem& p : {speed, velocity}) {
         const TemporalResult r = MakeTemporalSolver(backend)->Solve(p);
-        ASSERT_EQ(r.status, TemporalStatus::kOptimal) << ToString(mode) << " " << ToString(backend) << ": " << r.message;
+        ASSERT_EQ(r.status, TemporalStatus::kOptimal)
+            << ToString(mode) << " " << ToString(backend) << ": " << r.message;
         EXPECT_NEAR(r.total_time / expected, 1.0, 1e-7) << ToString(mode) << " " << ToString(backend);
       }
     }
@@ -105,8 +106,8 @@ TEST(Reliability, ABrakingStartThatCanBeFlownIsSolved) {
   TemporalProblem p = Line(4.0, 3.0, 10.0, 50, ConstraintMode::kCertified);
   p.boundary.start_velocity = Eigen::Vector3d(0.5, 0, 0);
   p.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
-  const auto ref = test_support::SolveTimeDomainReference(p.curve.piece(0), p.limits.max_velocity, p.limits.max_acceleration,
-                                                          *p.limits.max_jerk, 400, 0.05, -0.2);
+  const auto ref = test_support::SolveTimeDomainReference(
+      p.curve.piece(0), p.limits.max_velocity, p.limits.max_acceleration, *p.limits.max_jerk, 400, 0.05, -0.2);
   ASSERT_TRUE(ref.solved) << ref.message;
   for (const int K : {50, 200}) {
     p.cells_per_piece = K;

@@ -18,8 +18,8 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::LineProblem;
+using ::testing::HasSubstr;
 
 TemporalResult SolveWith(const TemporalProblem& p, bool structured) {
   SocpTemporalOptions options;
@@ -121,7 +121,8 @@ TEST(StructuredPath, TheFourRowPassesGiveTheTwoRowAnswer) {
   std::uniform_int_distribution<int> pieces(1, 6);
   std::uniform_int_distribution<int> cells(10, 60);
   for (int trial = 0; trial < 16; ++trial) {
-    TemporalProblem p = test_support::WalkProblem(MinimumJerkSpline(test_support::RandomWalk(rng, pieces(rng) + 1)), cells(rng));
+    TemporalProblem p =
+        test_support::WalkProblem(MinimumJerkSpline(test_support::RandomWalk(rng, pieces(rng) + 1)), cells(rng));
     const int kind = trial % 4;
     if (kind == 1) p.constraint_mode = ConstraintMode::kCertified;
     if (kind == 2) {

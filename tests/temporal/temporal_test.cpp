@@ -24,12 +24,12 @@
 namespace timeopt {
 namespace {
 
-using ::testing::HasSubstr;
 using test_support::LineProblem;
 using test_support::RandomWalk;
 using test_support::RestToRestTime;
 using test_support::Segment;
 using test_support::WalkProblem;
+using ::testing::HasSubstr;
 
 std::vector<TemporalBackend> Backends() { return {TemporalBackend::kSocp, TemporalBackend::kIpopt}; }
 
@@ -345,8 +345,7 @@ TEST(TemporalDiscretization, AccelerationNormScaleOnAStraightLine) {
 // curve and b alone (b is linear on the cell, so b(s_mid) = (b^k + b^{k+1}) / 2).
 Eigen::Vector3d MidCellAcceleration(const TemporalProblem& p, const TemporalProfile& prof, int i, int k) {
   const double s = (k + 0.5) * prof.ds();
-  return p.curve.Evaluate(i, s, 1) * prof.a(i, k) +
-         p.curve.Evaluate(i, s, 2) * 0.5 * (prof.b(i, k) + prof.b(i, k + 1));
+  return p.curve.Evaluate(i, s, 1) * prof.a(i, k) + p.curve.Evaluate(i, s, 2) * 0.5 * (prof.b(i, k) + prof.b(i, k + 1));
 }
 
 TEST_P(BothBackends, RhoRaisesTimeAndLowersAccelerationEnergy) {

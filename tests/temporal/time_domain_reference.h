@@ -175,18 +175,24 @@ inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece
   for (int n = 0; n < N; ++n) {
     const std::vector<int> locals{0, S(n), S(n) + 1, S(n) + 2, U(n), S(n + 1), S(n + 1) + 1, S(n + 1) + 2};
     const double inv = 1.0 / N;
-    rows.push_back({locals, [inv](const std::array<Dual, kLocals>& x) {
+    rows.push_back({locals,
+                    [inv](const std::array<Dual, kLocals>& x) {
                       const Dual h = x[0] * Dual(inv);
                       return x[5] - x[1] - x[2] * h - Dual(0.5) * x[3] * h * h - Dual(1.0 / 6.0) * x[4] * h * h * h;
-                    }, 0.0, 0.0});
-    rows.push_back({locals, [inv](const std::array<Dual, kLocals>& x) {
+                    },
+                    0.0, 0.0});
+    rows.push_back({locals,
+                    [inv](const std::array<Dual, kLocals>& x) {
                       const Dual h = x[0] * Dual(inv);
                       return x[6] - x[2] - x[3] * h - Dual(0.5) * x[4] * h * h;
-                    }, 0.0, 0.0});
-    rows.push_back({locals, [inv](const std::array<Dual, kLocals>& x) {
+                    },
+                    0.0, 0.0});
+    rows.push_back({locals,
+                    [inv](const std::array<Dual, kLocals>& x) {
                       const Dual h = x[0] * Dual(inv);
                       return x[7] - x[3] - x[4] * h;
-                    }, 0.0, 0.0});
+                    },
+                    0.0, 0.0});
   }
   // The limits at a state (s, sdot, sddot) reached `tau` (in units of T / N) after instant n with
   // jerk u_n; tau = 0 is the instant itself. Locals T, s, v, a, u.
@@ -200,28 +206,35 @@ inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece
     const Eigen::RowVectorXd c1 = coefficients(d1, axis), c2 = coefficients(d2, axis), c3 = coefficients(d3, axis);
     const auto add = [&](const std::vector<int>& locals, double tau, bool speed_and_acceleration) {
       if (speed_and_acceleration) {
-        rows.push_back({locals, [=](const std::array<Dual, kLocals>& x) {
+        rows.push_back({locals,
+                        [=](const std::array<Dual, kLocals>& x) {
                           Dual s, sd, sdd;
                           state(x, tau, &s, &sd, &sdd);
                           return time_domain::Polynomial(c1, s) * sd;
-                        }, -v(axis), v(axis)});
-        rows.push_back({locals, [=](const std::array<Dual, kLocals>& x) {
+                        },
+                        -v(axis), v(axis)});
+        rows.push_back({locals,
+                        [=](const std::array<Dual, kLocals>& x) {
                           Dual s, sd, sdd;
                           state(x, tau, &s, &sd, &sdd);
                           return time_domain::Polynomial(c1, s) * sdd + time_domain::Polynomial(c2, s) * sd * sd;
-                        }, -a(axis), a(axis)});
+                        },
+                        -a(axis), a(axis)});
       }
-      rows.push_back({locals, [=](const std::array<Dual, kLocals>& x) {
+      rows.push_back({locals,
+                      [=](const std::array<Dual, kLocals>& x) {
                         Dual s, sd, sdd;
                         state(x, tau, &s, &sd, &sdd);
-                        return time_domain::Polynomial(c1, s) * x[4] + Dual(3.0) * time_domain::Polynomial(c2, s) * sd * sdd +
+                        return time_domain::Polynomial(c1, s) * x[4] +
+                               Dual(3.0) * time_domain::Polynomial(c2, s) * sd * sdd +
                                time_domain::Polynomial(c3, s) * sd * sd * sd;
-                      }, -j(axis), j(axis)});
+                      },
+                      -j(axis), j(axis)});
     };
     for (int n = 0; n < N; ++n) {
       const std::vector<int> locals{0, S(n), S(n) + 1, S(n) + 2, U(n)};
-      add(locals, 0.0, true);   // instant n, and the jerk just after it
-      add(locals, 0.5, true);   // the middle of the interval
+      add(locals, 0.0, true);        // instant n, and the jerk just after it
+      add(locals, 0.5, true);        // the middle of the interval
       add(locals, 1.0, n == N - 1);  // the jerk just before instant n + 1 (the last instant's v and a too)
     }
   }
@@ -255,7 +268,8 @@ inline TimeDomainReference SolveTimeDomainReference(const PolynomialPiece& piece
   x0[S(0) + 2] = start_sddot;
   for (int n = 0; n < N; ++n) x0[U(n)] = (x0[S(n + 1) + 2] - x0[S(n) + 2]) / (T0 / N);
 
-  Ipopt::SmartPtr<time_domain::Nlp> nlp = new time_domain::Nlp(std::move(rows), std::move(x0), std::move(lo), std::move(hi));
+  Ipopt::SmartPtr<time_domain::Nlp> nlp =
+      new time_domain::Nlp(std::move(rows), std::move(x0), std::move(lo), std::move(hi));
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(false);
   app->Options()->SetIntegerValue("print_level", 0);
   app->Options()->SetStringValue("sb", "yes");

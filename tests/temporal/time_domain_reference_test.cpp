@@ -31,9 +31,7 @@ constexpr double kReferenceError = 1e-3;
 TEST(TimeDomainReference, MatchesTheSCurveClosedForms) {
   // Lines of 2 m (v not reached) and 0.5 m (a not reached either), v 4, a 3, j 10: T = 1.96032 s
   // and 1.16961 s (the closed forms of jerk_limited_test.cpp's SCurveTime). Measured 8e-6 and 1e-8.
-  const struct {
-    double length, expected;
-  } cases[] = {{2.0, 1.960321254054969}, {0.5, 1.1696070952851465}};
+  const struct { double length, expected; } cases[] = {{2.0, 1.960321254054969}, {0.5, 1.1696070952851465}};
   for (const auto& c : cases) {
     const auto r = test_support::SolveTimeDomainReference(
         test_support::LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(c.length, 0, 0)),
@@ -63,8 +61,8 @@ TEST(TimeDomainReference, JerkLimitedCurvesFromRestAreCloseToIt) {
   double worst = 0.0, worst_fine = 0.0;
   for (size_t i = 0; i < curves.size(); ++i) {
     const TemporalProblem p50 = CurveProblem(curves[i], 50);
-    const auto ref = test_support::SolveTimeDomainReference(p50.curve.piece(0), p50.limits.max_velocity,
-                                                            p50.limits.max_acceleration, *p50.limits.max_jerk, kInstants);
+    const auto ref = test_support::SolveTimeDomainReference(
+        p50.curve.piece(0), p50.limits.max_velocity, p50.limits.max_acceleration, *p50.limits.max_jerk, kInstants);
     ASSERT_TRUE(ref.solved) << "curve " << i << ": " << ref.message;
     double gap[3];
     const int Ks[3] = {50, 100, 200};
@@ -75,8 +73,8 @@ TEST(TimeDomainReference, JerkLimitedCurvesFromRestAreCloseToIt) {
       // A certified profile is flyable, so it is never faster than the optimum.
       EXPECT_GE(gap[k], -kReferenceError) << "curve " << i << " K " << Ks[k];
     }
-    std::printf("curve %zu: reference T %.6f s, K = 50 %+.3f%%, K = 100 %+.3f%%, K = 200 %+.3f%%\n", i,
-                ref.total_time, 100.0 * gap[0], 100.0 * gap[1], 100.0 * gap[2]);
+    std::printf("curve %zu: reference T %.6f s, K = 50 %+.3f%%, K = 100 %+.3f%%, K = 200 %+.3f%%\n", i, ref.total_time,
+                100.0 * gap[0], 100.0 * gap[1], 100.0 * gap[2]);
     // Closer as K grows (the grid only refines, the rest cells with it; 1e-4 for the SCP's stopping
     // tolerance: one curve measured +7e-5 from K = 100 to 200).
     EXPECT_LE(gap[1], gap[0] + 1e-4) << "curve " << i;

@@ -86,8 +86,8 @@ const double kConstantJerkMiddle = std::pow(2.0, -4.0 / 3.0);
 TemporalProfile SmoothRestToRest() {
   const double m = kConstantJerkMiddle;
   const std::vector<double> half = {0.0, m, 1.0, 1.5, 5.0 / 3.0, 1.5, 1.0, m, 0.0};
-  const std::vector<CellShape> shapes = {CellShape::kRestStart, CellShape::kQuadratic,
-                                         CellShape::kQuadratic, CellShape::kRestEnd};
+  const std::vector<CellShape> shapes = {CellShape::kRestStart, CellShape::kQuadratic, CellShape::kQuadratic,
+                                         CellShape::kRestEnd};
   return TemporalProfile::JerkLimited(Grid{half, half}, Shapes{shapes, shapes});
 }
 
@@ -97,35 +97,32 @@ TEST(JerkProfile, QuadraticCellTimesMatchQuadrature) {
   // closed forms' cancellation-prone limit); a minimum and a maximum inside; b = 0 at the start,
   // at the end, at both ends; steep braking; constant.
   const std::vector<std::array<double, 3>> cells = {
-      {1.0, 1.3, 2.0},  {1.0, 1.6, 2.0},      {1.0, 1.5 + 1e-13, 2.0}, {1.0, 1.5 - 1e-13, 2.0},
-      {1.0, 1.5, 2.0},  {2.0, 0.5, 1.5},      {0.5, 2.0, 1.0},         {0.0, 0.3, 1.0},
-      {0.0, 0.6, 1.0},  {1.0, 0.3, 0.0},      {0.0, 1.0, 0.0},         {4.0, 1.0, 0.01},
-      {3.0, 3.0, 3.0},  {1e-6, 0.5, 1.0},     {1.0, 0.26, 0.1},        {0.2, 0.2 + 1e-9, 0.2}};
+      {1.0, 1.3, 2.0}, {1.0, 1.6, 2.0},  {1.0, 1.5 + 1e-13, 2.0}, {1.0, 1.5 - 1e-13, 2.0},
+      {1.0, 1.5, 2.0}, {2.0, 0.5, 1.5},  {0.5, 2.0, 1.0},         {0.0, 0.3, 1.0},
+      {0.0, 0.6, 1.0}, {1.0, 0.3, 0.0},  {0.0, 1.0, 0.0},         {4.0, 1.0, 0.01},
+      {3.0, 3.0, 3.0}, {1e-6, 0.5, 1.0}, {1.0, 0.26, 0.1},        {0.2, 0.2 + 1e-9, 0.2}};
   for (const auto& c : cells) {
-    const TemporalProfile profile = OnePiece({c[0], c[1], c[2], c[1], c[0]},
-                                             {CellShape::kQuadratic, CellShape::kQuadratic});
+    const TemporalProfile profile =
+        OnePiece({c[0], c[1], c[2], c[1], c[0]}, {CellShape::kQuadratic, CellShape::kQuadratic});
     const double truth = QuadratureTime(c[0], c[1], c[2], ds);
     // The closed forms are a dozen operations on terms of one sign (a few eps), the quadrature a
     // sum of ~1150 positive terms (~eps sqrt(N)): 1e-14 relative covers both; a form with
     // cancellation loses ~1e-3 at c2 ~ 1e-12.
-    const std::string label = std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
-                              std::to_string(c[2]);
+    const std::string label = std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]);
     EXPECT_NEAR(profile.TimeAt(0, 1), truth, 1e-14 * truth) << label;
     // The mirror cell takes the same time.
     EXPECT_NEAR(profile.total_time() - profile.TimeAt(0, 1), truth, 1e-14 * truth) << label;
   }
   // b = 4 bm (sigma / ds)(1 - sigma / ds) from rest to rest: the integral is pi ds / (2 sqrt(bm)).
   // Here K = 1, so ds = 1.
-  EXPECT_NEAR(OnePiece({0.0, 1.0, 0.0}, {CellShape::kQuadratic}).total_time(), kPi / 2.0,
-              4 * kEps);
+  EXPECT_NEAR(OnePiece({0.0, 1.0, 0.0}, {CellShape::kQuadratic}).total_time(), kPi / 2.0, 4 * kEps);
 }
 
 TEST(JerkProfile, RestCellTimesMatchClosedFormAndQuadrature) {
   const double ds = 0.5;  // K = 2 cells
   for (double b_far : {1e-4, 0.3, 1.0, 7.5}) {
     const double m = kConstantJerkMiddle * b_far;
-    const TemporalProfile profile = OnePiece({0.0, m, b_far, m, 0.0},
-                                             {CellShape::kRestStart, CellShape::kRestEnd});
+    const TemporalProfile profile = OnePiece({0.0, m, b_far, m, 0.0}, {CellShape::kRestStart, CellShape::kRestEnd});
     // b = b_far (sigma / ds)^(4/3): 1 / sqrt(b) ~ sigma^(-2/3) at the start, within tanh-sinh's
     // reach. Written with the distance to the singular end for the rest-end mirror.
     auto rest = [&](double x, double) { return 1.0 / std::sqrt(b_far * std::pow(x / ds, 4.0 / 3.0)); };
@@ -174,10 +171,8 @@ TEST(JerkProfile, RestCellsWhoseSJerkChangesMatchQuadrature) {
 TemporalProfile Mixed() {
   return TemporalProfile::JerkLimited(
       Grid{{0.0, 0.3, 0.8, 1.5, 2.0, 0.5, 1.5, 1.1, 0.0}, {0.0, 0.3, 1.0, 0.2, 0.05, 0.5, 2.0, 0.9, 0.0}},
-      Shapes{{CellShape::kRestStart, CellShape::kQuadratic, CellShape::kQuadratic,
-              CellShape::kQuadratic},
-             {CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic,
-              CellShape::kRestEnd}});
+      Shapes{{CellShape::kRestStart, CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic},
+             {CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kRestEnd}});
 }
 
 TEST(JerkProfile, AtTimeInvertsTimeAtS) {
@@ -233,8 +228,7 @@ TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
     for (int i = 0; i < profile.num_pieces(); ++i) {
       for (int k = 0; k < K; ++k) {
         const double t0 = profile.TimeAt(i, k);
-        const double t1 = k + 1 < K ? profile.TimeAt(i, k + 1) : profile.piece_durations()[i] +
-                                                                     profile.TimeAt(i, 0);
+        const double t1 = k + 1 < K ? profile.TimeAt(i, k + 1) : profile.piece_durations()[i] + profile.TimeAt(i, 0);
         // A step of 1e-4 of the cell keeps t +- 2h inside it. Each value is accurate to a few ulps
         // of its size V (s ~ 1, the rest below ~10): rounding adds ~8 eps V / h to the
         // difference; truncation is estimated by Richardson and allowed twice over, plus 1e-9 for
@@ -244,14 +238,16 @@ TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
           const double t = t0 + fraction * (t1 - t0);
           const TemporalProfile::Point p = profile.AtTime(t);
           const double rounding = 8 * kEps * 10.0 / h;
-          const auto ds_dt = CentralDifference([&](double x) {
-            const TemporalProfile::Point q = profile.AtTime(x);
-            return q.piece * 1.0 + q.s;  // continuous across the piece joint
-          }, t, h);
+          const auto ds_dt = CentralDifference(
+              [&](double x) {
+                const TemporalProfile::Point q = profile.AtTime(x);
+                return q.piece * 1.0 + q.s;  // continuous across the piece joint
+              },
+              t, h);
           const auto dsdot = CentralDifference([&](double x) { return profile.AtTime(x).sdot; }, t, h);
           const auto dsddot = CentralDifference([&](double x) { return profile.AtTime(x).sddot; }, t, h);
-          const std::string label = "piece " + std::to_string(i) + " cell " + std::to_string(k) +
-                                    " at " + std::to_string(fraction);
+          const std::string label =
+              "piece " + std::to_string(i) + " cell " + std::to_string(k) + " at " + std::to_string(fraction);
           EXPECT_NEAR(p.sdot, ds_dt.first, 2 * ds_dt.second + rounding + 1e-9) << label;
           EXPECT_NEAR(p.sddot, dsdot.first, 2 * dsdot.second + rounding + 1e-9) << label;
           EXPECT_NEAR(p.sdddot, dsddot.first, 2 * dsddot.second + rounding + 1e-9) << label;
@@ -270,7 +266,8 @@ TEST(JerkProfile, InCellIsAtSInsideACellAndItsOwnStateAtItsEnds) {
       const double start = profile.CellStart(i, k), length = profile.CellLength(i, k);
       // Inside: the same cell, the same formulas (AtS's sigma is (start + 0.3 L) - start, 0.3 L to
       // an ulp of s, so agreement to 1e-12 relative).
-      const TemporalProfile::Point inside = profile.InCell(i, k, 0.3 * length), at = profile.AtS(i, start + 0.3 * length);
+      const TemporalProfile::Point inside = profile.InCell(i, k, 0.3 * length),
+                                   at = profile.AtS(i, start + 0.3 * length);
       EXPECT_NEAR(inside.sdot, at.sdot, 1e-12 * std::max(1.0, std::abs(at.sdot)));
       EXPECT_NEAR(inside.sdddot, at.sdddot, 1e-12 * std::max(1.0, std::abs(at.sdddot)));
       // At its start, the cell's own state is AtS's (a grid point belongs to the cell that starts there).
@@ -295,7 +292,8 @@ TEST(JerkProfile, InCellSamplesAreInCellAtEachSample) {
       for (int k = 0; k < profile.cells_per_piece(); ++k) {
         profile.InCellSamples(i, k, n, samples.data());
         for (int j = 0; j <= n; ++j) {
-          const TemporalProfile::Point p = profile.InCell(i, k, (static_cast<double>(j) / n) * profile.CellLength(i, k));
+          const TemporalProfile::Point p =
+              profile.InCell(i, k, (static_cast<double>(j) / n) * profile.CellLength(i, k));
           EXPECT_EQ(samples[j].s, p.s) << "piece " << i << " cell " << k << " sample " << j;
           EXPECT_EQ(samples[j].sdot, p.sdot) << "piece " << i << " cell " << k << " sample " << j;
           EXPECT_EQ(samples[j].sddot, p.sddot) << "piece " << i << " cell " << k << " sample " << j;
@@ -377,12 +375,11 @@ TEST(JerkProfile, TrajectoryJerkMatchesFiniteDifferencesOfAcceleration) {
         for (const Trajectory* trajectory : {&line, &curved}) {
           const TrajectoryState y = trajectory->Evaluate(t);
           for (int axis = 0; axis < 3; ++axis) {
-            const auto d = CentralDifference(
-                [&](double s) { return trajectory->Evaluate(s).acceleration(axis); }, t, h);
+            const auto d =
+                CentralDifference([&](double s) { return trajectory->Evaluate(s).acceleration(axis); }, t, h);
             EXPECT_NEAR(y.jerk(axis), d.first, 2 * d.second + 8 * kEps * 100.0 / h + 1e-8)
                 << "piece " << i << " cell " << k << " axis " << axis;
-            const auto v = CentralDifference(
-                [&](double s) { return trajectory->Evaluate(s).velocity(axis); }, t, h);
+            const auto v = CentralDifference([&](double s) { return trajectory->Evaluate(s).velocity(axis); }, t, h);
             EXPECT_NEAR(y.acceleration(axis), v.first, 2 * v.second + 8 * kEps * 100.0 / h + 1e-8)
                 << "piece " << i << " cell " << k << " axis " << axis;
           }
@@ -447,7 +444,8 @@ TEST(JerkProfile, InvalidProfilesAreRejected) {
   // b touching 0 inside (a double root at the middle): 1 / |sigma - ds/2|, infinite.
   ExpectRejected(Grid{{1, 1, 1, 0.0, 1}}, Shapes{two}, "cell 1 of piece 0: b = sdot^2 reaches 0");
   // Three positive values with b dipping below 0 between them.
-  ExpectRejected(Grid{{1, 0.05, 0.2}}, Shapes{{S::kQuadratic}}, "cell 0 of piece 0: the quadratic b = sdot^2 drops below 0");
+  ExpectRejected(Grid{{1, 0.05, 0.2}}, Shapes{{S::kQuadratic}},
+                 "cell 0 of piece 0: the quadratic b = sdot^2 drops below 0");
   // Rest cells: a far end at rest, or a near end not at rest.
   ExpectRejected(Grid{{0, 0, 0, 0.5, 1}}, Shapes{{S::kRestStart, S::kQuadratic}}, "cell 0 of piece 0 starts at rest");
   ExpectRejected(Grid{{0.1, 0.3, 1, 1, 1}}, Shapes{{S::kRestStart, S::kQuadratic}}, "cell 0 of piece 0 starts at rest");

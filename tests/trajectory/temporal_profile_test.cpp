@@ -17,9 +17,7 @@ using Grid = std::vector<std::vector<double>>;
 
 // Two pieces of K = 4 cells from rest to rest: accelerating, cruising (equal b: zero
 // acceleration), braking, with the joint value shared as the temporal stage shares it.
-Grid HandMadeB() {
-  return {{0.0, 0.36, 1.44, 1.44, 1.0}, {1.0, 0.81, 0.25, 0.04, 0.0}};
-}
+Grid HandMadeB() { return {{0.0, 0.36, 1.44, 1.44, 1.0}, {1.0, 0.81, 0.25, 0.04, 0.0}}; }
 
 // One cell by the textbook: v1^2 = v0^2 + 2 a ds gives the acceleration, and the time is the speed
 // change over the acceleration, or ds / v0 when the speed is constant.
@@ -119,7 +117,7 @@ TEST(TemporalProfile, InvalidGridsAreRejected) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
   EXPECT_THROW(TemporalProfile(Grid{}), std::invalid_argument);
-  EXPECT_THROW(TemporalProfile(Grid{{1.0}}), std::invalid_argument);  // K = 0
+  EXPECT_THROW(TemporalProfile(Grid{{1.0}}), std::invalid_argument);                        // K = 0
   EXPECT_THROW(TemporalProfile(Grid{{1.0, 1.0}, {1.0, 1.0, 1.0}}), std::invalid_argument);  // K differs
   EXPECT_THROW(TemporalProfile(Grid{{1.0, -1e-9}}), std::invalid_argument);
   EXPECT_THROW(TemporalProfile(Grid{{1.0, nan}}), std::invalid_argument);

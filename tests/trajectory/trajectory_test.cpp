@@ -60,10 +60,8 @@ TEST(Trajectory, StraightLineIsExactlyQuadraticInsideEveryCell) {
       EXPECT_EQ(x.jerk, Eigen::Vector3d::Zero()) << "cell " << k;
       const Eigen::Vector3d before = trajectory.Evaluate(t - h).position;
       const Eigen::Vector3d after = trajectory.Evaluate(t + h).position;
-      EXPECT_LT(((after - before) / (2.0 * h) - x.velocity).norm(), 8 * kEps * scale / h)
-          << "cell " << k;
-      EXPECT_LT(((after - 2.0 * x.position + before) / (h * h) - x.acceleration).norm(),
-                32 * kEps * scale / (h * h))
+      EXPECT_LT(((after - before) / (2.0 * h) - x.velocity).norm(), 8 * kEps * scale / h) << "cell " << k;
+      EXPECT_LT(((after - 2.0 * x.position + before) / (h * h) - x.acceleration).norm(), 32 * kEps * scale / (h * h))
           << "cell " << k;
     }
   }
@@ -113,8 +111,10 @@ Eigen::Vector3d HigherDerivative(const Trajectory& trajectory, double t, int ord
   const auto f = [&](int d) { return trajectory.curve().Evaluate(p.piece, p.s, d); };
   const double s1 = p.sdot, s2 = p.sddot;
   switch (order) {
-    case 3: return f(3) * std::pow(s1, 3) + 3.0 * f(2) * s1 * s2;
-    case 4: return f(4) * std::pow(s1, 4) + 6.0 * f(3) * s1 * s1 * s2 + 3.0 * f(2) * s2 * s2;
+    case 3:
+      return f(3) * std::pow(s1, 3) + 3.0 * f(2) * s1 * s2;
+    case 4:
+      return f(4) * std::pow(s1, 4) + 6.0 * f(3) * s1 * s1 * s2 + 3.0 * f(2) * s2 * s2;
     case 5:
       return f(5) * std::pow(s1, 5) + 10.0 * f(4) * std::pow(s1, 3) * s2 + 15.0 * f(3) * s1 * s2 * s2;
   }
@@ -168,8 +168,8 @@ void CheckFiniteDifferences(const Trajectory& trajectory, const std::string& nam
                                        (after.velocity - before.velocity) / (2.0 * kH),
                                        (after.acceleration - before.acceleration) / (2.0 * kH)};
         const Eigen::Vector3d analytic[3] = {x.velocity, x.acceleration, x.jerk};
-        const std::string at = name + " piece " + std::to_string(i) + " cell " + std::to_string(k) +
-                               " t = " + std::to_string(t);
+        const std::string at =
+            name + " piece " + std::to_string(i) + " cell " + std::to_string(k) + " t = " + std::to_string(t);
         for (int q = 0; q < 3; ++q) {
           double third = 0.0;  // |g'''| = |p^(q+3)|
           for (double u : {t - kH, t, t + kH}) {
@@ -205,8 +205,7 @@ TEST(Trajectory, DerivativesMatchFiniteDifferencesOnCurvedPieces) {
     const PiecewiseCurve cubic = NaturalCubicSpline(w), quintic = MinimumJerkSpline(w);
     for (const bool is_quintic : {false, true}) {
       const PiecewiseCurve& curve = is_quintic ? quintic : cubic;
-      const std::string name =
-          std::string(is_quintic ? "quintic" : "cubic") + " trial " + std::to_string(trial);
+      const std::string name = std::string(is_quintic ? "quintic" : "cubic") + " trial " + std::to_string(trial);
       for (ConstraintMode mode : {ConstraintMode::kPaper, ConstraintMode::kCertified}) {
         TemporalProblem problem = WalkProblem(curve, 20);
         problem.constraint_mode = mode;
@@ -242,9 +241,9 @@ TEST(Trajectory, SamplesClampingAndInvalidInput) {
   EXPECT_EQ(trajectory.Evaluate(T + 1.0).t, T);
   EXPECT_THROW(trajectory.Sample(0.0), std::invalid_argument);
   EXPECT_THROW(trajectory.Sample(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
-  EXPECT_THROW(Trajectory(Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0)),
-                          TemporalProfile({{1.0, 1.0}, {1.0, 1.0}})),
-               std::invalid_argument);
+  EXPECT_THROW(
+      Trajectory(Segment(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0)), TemporalProfile({{1.0, 1.0}, {1.0, 1.0}})),
+      std::invalid_argument);
 }
 
 }  // namespace

@@ -26,9 +26,7 @@ struct CbfModel {
   double objective_constant = 0.0;
 
   /// The file's objective value at a solution x of `problem` with value problem.c'x = min_value.
-  double FileObjective(double min_value) const {
-    return (maximize ? -min_value : min_value) + objective_constant;
-  }
+  double FileObjective(double min_value) const { return (maximize ? -min_value : min_value) + objective_constant; }
 };
 
 /// Parses CBF text (versions 1 to 4; only the subset above). Entries repeated within a section are

@@ -38,12 +38,12 @@ struct ConeSpec {
 
 /// A conic program (see the file comment for its meaning). Matrices are column-major with int indices.
 struct Problem {
-  Eigen::VectorXd c;                ///< Objective, size n.
-  Eigen::SparseMatrix<double> A;    ///< Equality matrix, p x n (p may be 0).
-  Eigen::VectorXd b;                ///< Equality right-hand side, size p.
-  Eigen::SparseMatrix<double> G;    ///< Cone matrix, m x n, m = cones.NumRows().
-  Eigen::VectorXd h;                ///< Cone right-hand side, size m.
-  ConeSpec cones;                   ///< Layout of K along the rows of G.
+  Eigen::VectorXd c;              ///< Objective, size n.
+  Eigen::SparseMatrix<double> A;  ///< Equality matrix, p x n (p may be 0).
+  Eigen::VectorXd b;              ///< Equality right-hand side, size p.
+  Eigen::SparseMatrix<double> G;  ///< Cone matrix, m x n, m = cones.NumRows().
+  Eigen::VectorXd h;              ///< Cone right-hand side, size m.
+  ConeSpec cones;                 ///< Layout of K along the rows of G.
 
   int num_variables() const { return static_cast<int>(c.size()); }
   int num_equalities() const { return static_cast<int>(b.size()); }

@@ -71,12 +71,12 @@ class ProblemBuilder {
 
   int num_variables_ = 0;
   std::vector<double> objective_;
-  std::vector<Term> terms_;                  // all terms of all rows
+  std::vector<Term> terms_;  // all terms of all rows
   std::vector<Term> equality_terms_;
-  std::vector<int> equality_begin_{0};       // row i uses equality_terms_[begin[i], begin[i+1])
+  std::vector<int> equality_begin_{0};  // row i uses equality_terms_[begin[i], begin[i+1])
   std::vector<double> equality_rhs_;
   std::vector<Row> orthant_rows_;
-  std::vector<Row> soc_rows_;                // all rows of all second-order cones
+  std::vector<Row> soc_rows_;  // all rows of all second-order cones
   std::vector<int> soc_dims_;
   std::vector<Row> rotated_rows_;
   std::vector<int> rotated_dims_;

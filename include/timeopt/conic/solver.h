@@ -80,9 +80,9 @@ enum class Status {
 
 /// Short lowercase name of a status, e.g. "optimal", "primal_infeasible".
 // Every enumerator, in declaration order (for FromString, and for listing the choices).
-inline constexpr std::array<Status, 6> kStatuses = {Status::kOptimal,         Status::kPrimalInfeasible,
-                                                   Status::kDualInfeasible,  Status::kIterationLimit,
-                                                   Status::kNumericalError,  Status::kNotSolved};
+inline constexpr std::array<Status, 6> kStatuses = {Status::kOptimal,        Status::kPrimalInfeasible,
+                                                    Status::kDualInfeasible, Status::kIterationLimit,
+                                                    Status::kNumericalError, Status::kNotSolved};
 const char* ToString(Status status);
 // The enumerator named `text` (as ToString writes it) into *status; false when none is.
 bool FromString(const std::string& text, Status* status);
@@ -106,8 +106,8 @@ enum class KktMethod {
   kReducedBanded,
 };
 
-inline constexpr std::array<KktMethod, 3> kKktMethods = {
-    KktMethod::kAutomatic, KktMethod::kAugmentedSparse, KktMethod::kReducedBanded};
+inline constexpr std::array<KktMethod, 3> kKktMethods = {KktMethod::kAutomatic, KktMethod::kAugmentedSparse,
+                                                         KktMethod::kReducedBanded};
 const char* ToString(KktMethod method);
 // The enumerator named `text` (as ToString writes it) into *method; false when none is.
 bool FromString(const std::string& text, KktMethod* method);
@@ -117,52 +117,52 @@ struct IterationInfo {
   /// 0 for the initial point, then 1, 2, ... Near the optimum the midpoint of a step that missed the
   /// tolerances is measured once (no KKT solve) and reported with the same number again.
   int iteration = 0;
-  double primal_objective = 0.0;   ///< c'x / tau.
-  double dual_objective = 0.0;     ///< -(b'y + h'z) / tau.
-  double gap = 0.0;                ///< s'z / tau^2 (absolute complementarity gap).
-  double primal_residual = 0.0;    ///< Relative primal residual (see Result).
-  double dual_residual = 0.0;      ///< Relative dual residual (see Result).
-  double tau = 0.0;                ///< Homogeneous variable tau (tends to 0 for infeasible problems).
-  double kappa = 0.0;              ///< Homogeneous variable kappa (tends to 0 for solvable problems).
-  double mu = 0.0;                 ///< Complementarity measure (s'z + tau kappa) / (degree + 1).
-  double step = 0.0;               ///< Step length taken in this iteration (0 for the initial point).
-  double sigma = 0.0;              ///< Centering parameter of this iteration.
-  int refinement_steps = 0;        ///< Iterative refinement steps used in this iteration.
+  double primal_objective = 0.0;  ///< c'x / tau.
+  double dual_objective = 0.0;    ///< -(b'y + h'z) / tau.
+  double gap = 0.0;               ///< s'z / tau^2 (absolute complementarity gap).
+  double primal_residual = 0.0;   ///< Relative primal residual (see Result).
+  double dual_residual = 0.0;     ///< Relative dual residual (see Result).
+  double tau = 0.0;               ///< Homogeneous variable tau (tends to 0 for infeasible problems).
+  double kappa = 0.0;             ///< Homogeneous variable kappa (tends to 0 for solvable problems).
+  double mu = 0.0;                ///< Complementarity measure (s'z + tau kappa) / (degree + 1).
+  double step = 0.0;              ///< Step length taken in this iteration (0 for the initial point).
+  double sigma = 0.0;             ///< Centering parameter of this iteration.
+  int refinement_steps = 0;       ///< Iterative refinement steps used in this iteration.
 };
 
 /// Outcome of Solver::Solve. For the meaning of x, y, z, s under each status see Status.
 struct Result {
   Status status = Status::kNotSolved;
-  std::string message;             ///< Human readable reason for the status.
-  Eigen::VectorXd x;               ///< Primal variables, size n.
-  Eigen::VectorXd y;               ///< Duals of A x = b, size p (sign: c + A'y + G'z = 0).
-  Eigen::VectorXd z;               ///< Duals of G x + s = h, size m, in K.
-  Eigen::VectorXd s;               ///< Slacks h - G x, size m, in K.
-  double primal_objective = 0.0;   ///< c'x.
-  double dual_objective = 0.0;     ///< -b'y - h'z.
-  double gap = 0.0;                ///< Absolute complementarity gap s'z.
+  std::string message;            ///< Human readable reason for the status.
+  Eigen::VectorXd x;              ///< Primal variables, size n.
+  Eigen::VectorXd y;              ///< Duals of A x = b, size p (sign: c + A'y + G'z = 0).
+  Eigen::VectorXd z;              ///< Duals of G x + s = h, size m, in K.
+  Eigen::VectorXd s;              ///< Slacks h - G x, size m, in K.
+  double primal_objective = 0.0;  ///< c'x.
+  double dual_objective = 0.0;    ///< -b'y - h'z.
+  double gap = 0.0;               ///< Absolute complementarity gap s'z.
   /// max(||Ax-b||_inf, ||Gx+s-h||_inf) / max(1, ||b||_inf, ||h||_inf, ||Ax||_inf, ||Gx||_inf, ||s||_inf).
   /// The stopping test measures it in the solver's internal coordinates, where the first two rows of
   /// each rotated cone are turned by 45 degrees, so here it can exceed the tolerance by up to sqrt(2).
   double primal_residual = 0.0;
   /// ||c + A'y + G'z||_inf / max(1, ||c||_inf, ||A'y||_inf, ||G'z||_inf).
   double dual_residual = 0.0;
-  int iterations = 0;              ///< Interior-point iterations performed.
-  double solve_time_seconds = 0.0; ///< Wall time of Solve(), including analysis.
-  int num_refinement_steps = 0;    ///< Iterative refinement steps over all iterations.
+  int iterations = 0;                   ///< Interior-point iterations performed.
+  double solve_time_seconds = 0.0;      ///< Wall time of Solve(), including analysis.
+  int num_refinement_steps = 0;         ///< Iterative refinement steps over all iterations.
   int num_dynamic_regularizations = 0;  ///< Pivots replaced by dynamic regularization.
   /// Times the static regularization was raised (by SolverOptions::regularization_boost_factor) after
   /// a factorization broke down (the direction came out non-finite); at most
   /// SolverOptions::max_regularization_boosts per solve.
   int num_regularization_boosts = 0;
-  bool reused_symbolic = false;    ///< True if the ordering and symbolic analysis were reused.
+  bool reused_symbolic = false;  ///< True if the ordering and symbolic analysis were reused.
   /// True if kOptimal was reached only with the reduced tolerances of SolverOptions (the iteration
   /// stalled near the optimum); residuals and gap tell the accuracy actually reached.
   bool reduced_accuracy = false;
   /// Dimension of the factorized system: n + p + m + 2 per expanded cone (kAugmentedSparse) or
   /// n + p + 2 per expanded cone (kReducedBanded).
   int kkt_size = 0;
-  long long kkt_nonzeros = 0;      ///< Stored non-zeros of the factorized matrix's upper triangle.
+  long long kkt_nonzeros = 0;  ///< Stored non-zeros of the factorized matrix's upper triangle.
   /// Non-zeros of the LDL' factor L (strictly lower part; for kReducedBanded its stored profile).
   long long factor_nonzeros = 0;
   /// The method used at the end (never kAutomatic after Solve()). The reduced method hands over to

@@ -8,8 +8,7 @@
 
 namespace timeopt::internal {
 
-inline bool FailOption(std::string* error, const std::string& field, const std::string& expected,
-                       double got) {
+inline bool FailOption(std::string* error, const std::string& field, const std::string& expected, double got) {
   if (error != nullptr) {
     std::ostringstream s;
     s << field << ": expected " << expected << ", got " << got;

@@ -31,9 +31,7 @@ struct VehicleLimits {
   double gravity = 9.81;  // m/s^2, > 0
 
   // True if any of the quadrotor limits above is set.
-  bool HasNormLimits() const {
-    return max_speed || max_acceleration_norm || max_thrust || min_thrust || max_tilt;
-  }
+  bool HasNormLimits() const { return max_speed || max_acceleration_norm || max_thrust || min_thrust || max_tilt; }
   // Optional bound lambda_a on the change of each axis' acceleration between consecutive cells
   // (paper eqs. 44-45) and against the boundary accelerations (eqs. 48-49), m/s^2 per cell.
   // Absent: none of these rows exist.

@@ -34,7 +34,6 @@ struct EndDerivatives {
 // sum_i integral_0^1 |f_i'''(s)|^2 ds, among all C2 curves with the given end derivatives. The
 // optimum is C4 at the interior waypoints; it is found by one banded linear solve (bandwidth
 // independent of the number of pieces, so linear time).
-PiecewiseCurve MinimumJerkSpline(const Waypoints& waypoints,
-                                 const EndDerivatives& ends = EndDerivatives::RestToRest());
+PiecewiseCurve MinimumJerkSpline(const Waypoints& waypoints, const EndDerivatives& ends = EndDerivatives::RestToRest());
 
 }  // namespace timeopt

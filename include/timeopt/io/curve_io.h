@@ -28,7 +28,7 @@
 namespace timeopt {
 
 struct CurveFile {
-  PiecewiseCurve curve;                         // unit pieces (rescaled if durations were given)
+  PiecewiseCurve curve;                          // unit pieces (rescaled if durations were given)
   std::optional<std::vector<double>> durations;  // the given durations h_i, seconds or any unit
 };
 

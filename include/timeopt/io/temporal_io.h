@@ -22,8 +22,7 @@
 
 namespace timeopt {
 
-TemporalProblem ParseTemporalProblemJson(const std::string& json_text,
-                                         const std::string& context = "problem");
+TemporalProblem ParseTemporalProblemJson(const std::string& json_text, const std::string& context = "problem");
 TemporalProblem ReadTemporalProblemJson(const std::string& path);
 
 // {"status", "solver", "total_time", "objective", "piece_durations", "iterations",

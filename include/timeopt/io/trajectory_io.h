@@ -71,9 +71,9 @@ bool FromString(const std::string& text, ExportFormat* format);
 struct ExportOptions {
   double rate_hz = kDefaultSampleRateHz;  // csv, px4, rosbag
   YawOptions yaw;
-  PolynomialFitOptions fit;              // polynomial
-  const OccupancyMap* map = nullptr;     // rosbag only (std::invalid_argument for another format)
-  double voxel_radius = 1.0;             // m, rosbag with a map
+  PolynomialFitOptions fit;           // polynomial
+  const OccupancyMap* map = nullptr;  // rosbag only (std::invalid_argument for another format)
+  double voxel_radius = 1.0;          // m, rosbag with a map
 };
 void WriteExport(const Trajectory& trajectory, ExportFormat format, const std::string& path,
                  const ExportOptions& options);

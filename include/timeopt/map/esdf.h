@@ -73,9 +73,13 @@ struct LargeAllocator {
   }
   void deallocate(T* p, std::size_t n) noexcept { DeallocateLarge(p, n * sizeof(T)); }
   template <typename U>
-  bool operator==(const LargeAllocator<U>&) const { return true; }
+  bool operator==(const LargeAllocator<U>&) const {
+    return true;
+  }
   template <typename U>
-  bool operator!=(const LargeAllocator<U>&) const { return false; }
+  bool operator!=(const LargeAllocator<U>&) const {
+    return false;
+  }
 };
 
 }  // namespace internal
@@ -98,8 +102,8 @@ class Esdf final : public DistanceField {
   // max_bytes > 0 is a memory budget: a field whose PeakBytes exceed it is refused before any
   // allocation (std::invalid_argument with both figures). Throws std::invalid_argument for an
   // empty map without a box, a box of zero size, and the cases of the grid constructor.
-  static Esdf FromMap(const OccupancyMap& map,
-                      const std::optional<Eigen::AlignedBox3d>& box = std::nullopt, int64_t max_bytes = 0);
+  static Esdf FromMap(const OccupancyMap& map, const std::optional<Eigen::AlignedBox3d>& box = std::nullopt,
+                      int64_t max_bytes = 0);
 
   // The field over a region of interest of a large map: `region` (metres, snapped outwards to the
   // lattice) clipped to the map's known box. Where the region cuts the map, its outermost voxel
@@ -113,8 +117,7 @@ class Esdf final : public DistanceField {
   static Esdf FromMapRegion(const OccupancyMap& map, const Eigen::AlignedBox3d& region, int64_t max_bytes = 0);
 
   double Distance(const Eigen::Vector3d& point) const override;
-  double DistanceAndGradient(const Eigen::Vector3d& point,
-                             Eigen::Vector3d* gradient) const override;
+  double DistanceAndGradient(const Eigen::Vector3d& point, Eigen::Vector3d* gradient) const override;
 
   // Batched queries (see DistanceField::Distances), inlined per point: no virtual call inside.
   void Distances(const Eigen::Matrix3Xd& points, Eigen::VectorXd* distances,
@@ -142,7 +145,7 @@ class Esdf final : public DistanceField {
   VoxelBox box_;
   Eigen::Vector3d first_centre_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d last_centre_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3i max_cell_ = Eigen::Vector3i::Zero();   // largest lower cell corner per axis
+  Eigen::Vector3i max_cell_ = Eigen::Vector3i::Zero();                        // largest lower cell corner per axis
   Eigen::Matrix<int64_t, 3, 1> step_ = Eigen::Matrix<int64_t, 3, 1>::Zero();  // 0 on flat axes
   std::vector<float, internal::LargeAllocator<float>> values_;
 };

@@ -21,10 +21,10 @@ namespace timeopt {
 // xy rectangle, radius uniform in [min_radius, max_radius].
 struct ForestOptions {
   Eigen::AlignedBox3d bounds{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 10, 3)};  // metres
-  double resolution = 0.1;    // voxel edge, metres
-  double density = 0.1;       // trees per square metre; count = round(density * xy area)
-  double min_radius = 0.15;   // metres
-  double max_radius = 0.4;    // metres
+  double resolution = 0.1;                                                           // voxel edge, metres
+  double density = 0.1;      // trees per square metre; count = round(density * xy area)
+  double min_radius = 0.15;  // metres
+  double max_radius = 0.4;   // metres
   uint64_t seed = 1;
 
   // Throws std::invalid_argument naming the first bad field.
@@ -39,12 +39,12 @@ struct ForestOptions {
 // bounds start at the origin and fit the corridor plus `wall` of solid on every side (Bounds()),
 // so that the legs' ends are closed.
 struct SharpTurnOptions {
-  double resolution = 0.1;       // voxel edge, metres
-  double corridor_width = 1.2;   // metres
-  double leg_length = 8.0;       // metres, each leg
-  double turn_angle_deg = 160;   // heading change at the turn, degrees, in (0, 180]
-  double height = 2.0;           // free height of the corridor, metres
-  double wall = 0.5;             // solid margin around the corridor, metres
+  double resolution = 0.1;      // voxel edge, metres
+  double corridor_width = 1.2;  // metres
+  double leg_length = 8.0;      // metres, each leg
+  double turn_angle_deg = 160;  // heading change at the turn, degrees, in (0, 180]
+  double height = 2.0;          // free height of the corridor, metres
+  double wall = 0.5;            // solid margin around the corridor, metres
 
   void Validate() const;
   // Corridor polyline in the xy plane: start, turn point, end (metres).
@@ -57,11 +57,11 @@ struct SharpTurnOptions {
 // bounds (boxes are clipped to the bounds), plus an optional ground slab one voxel thick.
 struct RandomBoxesOptions {
   Eigen::AlignedBox3d bounds{Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 10, 3)};  // metres
-  double resolution = 0.1;   // voxel edge, metres
-  int count = 20;            // number of boxes
-  double min_size = 0.3;     // metres, per axis
-  double max_size = 1.5;     // metres, per axis
-  bool ground = false;       // occupy the lowest voxel layer
+  double resolution = 0.1;                                                           // voxel edge, metres
+  int count = 20;                                                                    // number of boxes
+  double min_size = 0.3;                                                             // metres, per axis
+  double max_size = 1.5;                                                             // metres, per axis
+  bool ground = false;                                                               // occupy the lowest voxel layer
   uint64_t seed = 1;
 
   void Validate() const;

@@ -59,8 +59,7 @@ class OccupancyMap {
 
   // The map with exactly the occupied / free voxels of `grid` (every voxel of the grid becomes
   // known; the tree is pruned). Throws std::invalid_argument for an invalid grid.
-  static OccupancyMap FromGrid(const OccupancyGrid& grid,
-                               UnknownSpace unknown = UnknownSpace::kFree);
+  static OccupancyMap FromGrid(const OccupancyGrid& grid, UnknownSpace unknown = UnknownSpace::kFree);
 
   // Writes the map as an OctoMap binary `.bt` file. Throws timeopt::FileError on failure.
   void Save(const std::string& path) const;

@@ -55,14 +55,12 @@ struct OccupancyGrid {
   OccupancyGrid() = default;
 
   int64_t Linear(const Eigen::Vector3i& local) const {
-    return local.x() + static_cast<int64_t>(box.size.x()) *
-                           (local.y() + static_cast<int64_t>(box.size.y()) * local.z());
+    return local.x() +
+           static_cast<int64_t>(box.size.x()) * (local.y() + static_cast<int64_t>(box.size.y()) * local.z());
   }
   // Occupancy of the voxel with world index `index` (must be inside the box).
   bool At(const Eigen::Vector3i& index) const { return occupied[Linear(index - box.min)] != 0; }
-  void Set(const Eigen::Vector3i& index, bool value) {
-    occupied[Linear(index - box.min)] = value ? 1 : 0;
-  }
+  void Set(const Eigen::Vector3i& index, bool value) { occupied[Linear(index - box.min)] = value ? 1 : 0; }
   // Centre of the voxel with world index `index`, metres.
   Eigen::Vector3d Centre(const Eigen::Vector3i& index) const {
     return (index.cast<double>().array() + 0.5).matrix() * resolution;

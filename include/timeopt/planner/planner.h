@@ -109,11 +109,11 @@ struct PlannerOptions {
 };
 
 enum class PlanStatus {
-  kSuccess,             // curve, temporal result and trajectory usable
-  kInvalidInput,        // bad options or points; message names them
+  kSuccess,       // curve, temporal result and trajectory usable
+  kInvalidInput,  // bad options or points; message names them
   kStartOutsideMap,
   kGoalOutsideMap,
-  kStartInCollision,    // start closer than robot_radius to an obstacle
+  kStartInCollision,  // start closer than robot_radius to an obstacle
   kGoalInCollision,
   kUnreachable,         // the front-end found no path with the clearance
   kSearchLimit,         // the front-end's node limit was reached
@@ -124,18 +124,10 @@ enum class PlanStatus {
 };
 // Every enumerator, in declaration order (for FromString, and for listing the choices).
 inline constexpr std::array<PlanStatus, 12> kPlanStatuses = {
-    PlanStatus::kSuccess,
-    PlanStatus::kInvalidInput,
-    PlanStatus::kStartOutsideMap,
-    PlanStatus::kGoalOutsideMap,
-    PlanStatus::kStartInCollision,
-    PlanStatus::kGoalInCollision,
-    PlanStatus::kUnreachable,
-    PlanStatus::kSearchLimit,
-    PlanStatus::kCollision,
-    PlanStatus::kSpatialFailure,
-    PlanStatus::kTemporalInfeasible,
-    PlanStatus::kTemporalFailure,
+    PlanStatus::kSuccess,        PlanStatus::kInvalidInput,       PlanStatus::kStartOutsideMap,
+    PlanStatus::kGoalOutsideMap, PlanStatus::kStartInCollision,   PlanStatus::kGoalInCollision,
+    PlanStatus::kUnreachable,    PlanStatus::kSearchLimit,        PlanStatus::kCollision,
+    PlanStatus::kSpatialFailure, PlanStatus::kTemporalInfeasible, PlanStatus::kTemporalFailure,
 };
 // "success", "invalid_input", "start_outside_map", "goal_outside_map", "start_in_collision",
 // "goal_in_collision", "unreachable", "search_limit", "collision", "spatial_failure",
@@ -155,12 +147,12 @@ struct PlanStageTimes {
 struct PlanResult {
   PlanStatus status = PlanStatus::kInvalidInput;
   std::string message;
-  Waypoints waypoints;          // front-end waypoints (after shortcutting, before splitting)
-  PiecewiseCurve curve;         // the spatial curve (unit pieces in s)
-  SpatialResult spatial;        // the last spatial attempt
-  TemporalResult temporal;      // set when the temporal stage ran
+  Waypoints waypoints;      // front-end waypoints (after shortcutting, before splitting)
+  PiecewiseCurve curve;     // the spatial curve (unit pieces in s)
+  SpatialResult spatial;    // the last spatial attempt
+  TemporalResult temporal;  // set when the temporal stage ran
   int spatial_attempts = 0;
-  double path_length = 0.0;     // arc length of the curve, metres
+  double path_length = 0.0;  // arc length of the curve, metres
   // Smallest clearance on the dense check, metres: the exact distance to occupied voxel cubes
   // near obstacles, the ESDF elsewhere.
   double min_clearance = 0.0;
@@ -186,8 +178,7 @@ class Planner {
  public:
   explicit Planner(const Esdf& esdf);  // the ESDF must outlive the planner
   // Never throws for bad input: the status says what went wrong.
-  PlanResult Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal,
-                  const PlannerOptions& options = {});
+  PlanResult Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, const PlannerOptions& options = {});
 
  private:
   const Esdf* esdf_;
@@ -222,8 +213,7 @@ double MinClearance(const DistanceField& field, const PiecewiseCurve& curve, dou
 double VoxelClearance(const Esdf& esdf, const Eigen::Vector3d& point, double reach);
 
 // Like MinClearance, but samples whose ESDF value is below `exact_below` get VoxelClearance.
-double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double step,
-                         double exact_below);
+double MinVoxelClearance(const Esdf& esdf, const PiecewiseCurve& curve, double step, double exact_below);
 
 // Waypoints with every segment longer than max_length split evenly.
 Waypoints SplitSegments(const Waypoints& waypoints, double max_length);

@@ -67,11 +67,11 @@ struct QuadrotorSimOptions {
 
 /// The simulated vehicle's state at the start of one controller step.
 struct SimState {
-  double t = 0.0;                                          ///< s
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();      ///< m
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      ///< m/s
-  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  ///< m/s^2
-  Eigen::Vector3d jerk = Eigen::Vector3d::Zero();          ///< command held over the step, m/s^3
+  double t = 0.0;                                            ///< s
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();        ///< m
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();        ///< m/s
+  Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();    ///< m/s^2
+  Eigen::Vector3d jerk = Eigen::Vector3d::Zero();            ///< command held over the step, m/s^3
   Eigen::Vector3d position_error = Eigen::Vector3d::Zero();  ///< position - reference position, m
 };
 
@@ -92,8 +92,8 @@ inline double DefaultFlightTolerance(const VehicleLimits& limits) {
 
 struct FeasibilityReport {
   /// True iff the largest velocity and acceleration ratios (and the quadrotor limits' ratios, for
-  /// those given) are <= 1 + limit_tolerance and the flight stayed finite. (A jerk limit is the vehicle's: commands are clipped to it, so it always holds;
-  /// see clipped_steps.)
+  /// those given) are <= 1 + limit_tolerance and the flight stayed finite. (A jerk limit is the vehicle's: commands are
+  /// clipped to it, so it always holds; see clipped_steps.)
   bool feasible = false;
   /// The verdict's slack it was judged with (QuadrotorSimOptions::limit_tolerance).
   double tolerance = 0.0;
@@ -158,16 +158,14 @@ class QuadrotorSim {
   /// the options' initial errors). The profile meets the start velocity, but its acceleration at
   /// t = 0 is the first cell's unless max_acceleration_change bounds it, so a vehicle at rest
   /// starts with a jump.
-  FeasibilityReport Fly(const Trajectory& reference, const VehicleLimits& limits,
-                        const Eigen::Vector3d& start_velocity,
+  FeasibilityReport Fly(const Trajectory& reference, const VehicleLimits& limits, const Eigen::Vector3d& start_velocity,
                         const Eigen::Vector3d& start_acceleration) const;
 
   const Options& options() const { return options_; }
 
  private:
   FeasibilityReport RunFrom(const Reference& reference, double duration, const VehicleLimits& limits,
-                            const Eigen::Vector3d& start_velocity,
-                            const Eigen::Vector3d& start_acceleration) const;
+                            const Eigen::Vector3d& start_velocity, const Eigen::Vector3d& start_acceleration) const;
 
   Options options_;
 };

@@ -67,14 +67,9 @@ enum class PathSearchStatus {
 
 // Every enumerator, in declaration order (for FromString, and for listing the choices).
 inline constexpr std::array<PathSearchStatus, 8> kPathSearchStatuses = {
-    PathSearchStatus::kSuccess,
-    PathSearchStatus::kInvalidInput,
-    PathSearchStatus::kStartOutsideMap,
-    PathSearchStatus::kGoalOutsideMap,
-    PathSearchStatus::kStartInCollision,
-    PathSearchStatus::kGoalInCollision,
-    PathSearchStatus::kUnreachable,
-    PathSearchStatus::kNodeLimit,
+    PathSearchStatus::kSuccess,        PathSearchStatus::kInvalidInput,     PathSearchStatus::kStartOutsideMap,
+    PathSearchStatus::kGoalOutsideMap, PathSearchStatus::kStartInCollision, PathSearchStatus::kGoalInCollision,
+    PathSearchStatus::kUnreachable,    PathSearchStatus::kNodeLimit,
 };
 const char* ToString(PathSearchStatus status);
 // The enumerator named `text` (as ToString writes it) into *status; false when none is.
@@ -105,11 +100,11 @@ class PathSearch {
     void operator()(void* p) const { std::free(p); }
   };
   const Esdf* esdf_;
-  int64_t cells_ = 0;                                // size of the arrays below
-  std::unique_ptr<float[], FreeDeleter> g_;          // cost-to-come per voxel
-  std::unique_ptr<int32_t[], FreeDeleter> parent_;   // linear index of the parent, -1 for none
-  std::unique_ptr<uint8_t[], FreeDeleter> state_;    // 0 new, 1 open, 2 closed
-  std::vector<int32_t> touched_;                     // voxels to reset before the next search
+  int64_t cells_ = 0;                               // size of the arrays below
+  std::unique_ptr<float[], FreeDeleter> g_;         // cost-to-come per voxel
+  std::unique_ptr<int32_t[], FreeDeleter> parent_;  // linear index of the parent, -1 for none
+  std::unique_ptr<uint8_t[], FreeDeleter> state_;   // 0 new, 1 open, 2 closed
+  std::vector<int32_t> touched_;                    // voxels to reset before the next search
 };
 
 }  // namespace timeopt

@@ -192,9 +192,7 @@ struct SpatialResult {
   SpatialCostBreakdown initial_cost, final_cost;
   std::vector<SpatialIteration> iterations;
   double solve_time_seconds = 0.0;  // problem construction and solve
-  bool is_usable() const {
-    return status == SpatialStatus::kConverged || status == SpatialStatus::kIterationLimit;
-  }
+  bool is_usable() const { return status == SpatialStatus::kConverged || status == SpatialStatus::kIterationLimit; }
 };
 
 // Optimizes the curve whose joints start at `waypoints` (columns; the first and last are the fixed

@@ -44,7 +44,7 @@ const char* ToString(JointType type);
 bool FromString(const std::string& text, JointType* type);
 
 struct JointInfo {
-  int joint = 0;             // between piece `joint` and `joint + 1`
+  int joint = 0;  // between piece `joint` and `joint + 1`
   JointType type = JointType::kC1;
   double speed_ratio = 1.0;  // |f'_i(1)| / |f'_{i+1}(0)| (1 for C1; 0 for a vanishing tangent)
   double angle = 0.0;        // angle between the tangents, radians
@@ -63,8 +63,8 @@ struct LinearRow {
     kAcceleration,
     kAccelerationChange,
     kBoundaryAcceleration,
-    kJerk,          // jerk-limited mode: the linearized jerk rows
-    kContinuity,    // jerk-limited mode: sddot continuous, rest-cell shape (equalities)
+    kJerk,        // jerk-limited mode: the linearized jerk rows
+    kContinuity,  // jerk-limited mode: sddot continuous, rest-cell shape (equalities)
   };
   Kind kind = Kind::kAcceleration;
   std::vector<std::pair<int, double>> terms;  // (var, coef), distinct vars
@@ -122,8 +122,8 @@ struct Cell {
 // x is.
 struct ControlForm {
   static constexpr int kMaxTerms = 4;
-  int first = 0;                       // the first control value it touches
-  int count = 0;                       // how many consecutive ones (0: a constant)
+  int first = 0;  // the first control value it touches
+  int count = 0;  // how many consecutive ones (0: a constant)
   std::array<double, kMaxTerms> coef{};
   double constant = 0.0;
   double Value(const std::vector<double>& y) const {
@@ -139,8 +139,8 @@ struct ControlBasis {
   // Per control: the half-grid index of its cell's middle, or, for a boundary value that is free
   // (tangent and curvature vanish there, so b is bound by nothing but its cells), that value's.
   std::vector<int> middle;
-  std::vector<char> at_knot;      // per control: 1 for such a boundary value
-  std::vector<double> scale;      // per control: P1 (or the boundary b) = scale * y
+  std::vector<char> at_knot;  // per control: 1 for such a boundary value
+  std::vector<double> scale;  // per control: P1 (or the boundary b) = scale * y
   // Control c of the profile with b at every half-grid value.
   double FromGrid(int c, const std::vector<double>& b) const {
     const size_t g = static_cast<size_t>(middle[static_cast<size_t>(c)]);
@@ -158,14 +158,14 @@ struct TemporalDiscretization {
   // the two sides of the rho cone t * 1 >= ||a||^2 in the SOCP (see socp_backend.cpp). The median,
   // not a root-sum-square, so that cells near a vanishing tangent (unbounded caps) do not set it.
   double acceleration_norm_scale = 1.0;
-  int num_vars = 0;                        // size of x
-  std::vector<GridValue> grid;             // m (K + 1) values; piece i, point k at i (K + 1) + k
-  std::vector<Cell> cells;                 // m K cells in path order
-  std::vector<double> var_upper;           // upper bound of each x (>= 0, may be +inf); x >= 0
-  std::vector<LinearRow> rows;             // over x, constants folded into the bounds
-  std::vector<JointInfo> joints;           // m - 1 entries
-  std::vector<CubicRow> cubic_rows;        // JerkRows::kExact only; <= 1 each
-  std::vector<ConeRow> cone_rows;          // the quadrotor's norm limits (VehicleLimits)
+  int num_vars = 0;                  // size of x
+  std::vector<GridValue> grid;       // m (K + 1) values; piece i, point k at i (K + 1) + k
+  std::vector<Cell> cells;           // m K cells in path order
+  std::vector<double> var_upper;     // upper bound of each x (>= 0, may be +inf); x >= 0
+  std::vector<LinearRow> rows;       // over x, constants folded into the bounds
+  std::vector<JointInfo> joints;     // m - 1 entries
+  std::vector<CubicRow> cubic_rows;  // JerkRows::kExact only; <= 1 each
+  std::vector<ConeRow> cone_rows;    // the quadrotor's norm limits (VehicleLimits)
   // Jerk-limited mode (DiscretizeJerkLimited): the grid is the half grid, cells_per_piece = 2 K
   // half cells; shapes holds the shape of each of the m K full cells in path order.
   bool jerk_limited = false;

@@ -131,10 +131,10 @@ struct TemporalProblem {
   //   limit or quadrotor acceleration cones): the start speed lowered as little as possible, then
   //   the end speed, along their tangents; boundary accelerations are not relaxed;
   // - otherwise (a jerk limit, lambda_a, or the cones of max_acceleration_norm, the thrust and the
-  //   tilt), with a start in motion: the start state scaled towards rest, its velocity by the largest lambda (within 0.01)
-  //   that can be flown and its acceleration by lambda^2 (what the same curve gives at that speed;
-  //   a braking start keeps its braking along the path when it can). A jerk-limited solve that fails numerically is relaxed the same way (a
-  //   start exactly at a limit leaves an interior-point method no interior at the first grid point).
+  //   tilt), with a start in motion: the start state scaled towards rest, its velocity by the largest lambda (within
+  //   0.01) that can be flown and its acceleration by lambda^2 (what the same curve gives at that speed; a braking
+  //   start keeps its braking along the path when it can). A jerk-limited solve that fails numerically is relaxed the
+  //   same way (a start exactly at a limit leaves an interior-point method no interior at the first grid point).
   // Otherwise the status stays infeasible, with the diagnosis.
   bool relax_boundary = false;
   int max_scp_iterations = 30;

@@ -23,11 +23,8 @@ enum class TemporalStatus {
 // "optimal", "infeasible", "iteration_limit", "numerical_error", "invalid_input".
 // Every enumerator, in declaration order (for FromString, and for listing the choices).
 inline constexpr std::array<TemporalStatus, 5> kTemporalStatuses = {
-    TemporalStatus::kOptimal,
-    TemporalStatus::kInfeasible,
-    TemporalStatus::kIterationLimit,
-    TemporalStatus::kNumericalError,
-    TemporalStatus::kInvalidInput,
+    TemporalStatus::kOptimal,        TemporalStatus::kInfeasible,   TemporalStatus::kIterationLimit,
+    TemporalStatus::kNumericalError, TemporalStatus::kInvalidInput,
 };
 const char* ToString(TemporalStatus status);
 // The enumerator named `text` (as ToString writes it) into *status; false when none is.
@@ -47,7 +44,7 @@ bool FromString(const std::string& text, TemporalBackend* backend);
 struct TemporalResult {
   TemporalStatus status = TemporalStatus::kNumericalError;
   std::string message;
-  std::string solver;            // "socp" or "ipopt"
+  std::string solver;  // "socp" or "ipopt"
   // The path that answered: "structured" (the SOCP backend's banded interior-point method),
   // "conic" (its general conic solver), "ipopt" (Ipopt, also when the SOCP backend fell back to
   // it), or empty when presolve decided without a solve.
@@ -55,8 +52,8 @@ struct TemporalResult {
   // Inequality rows of the last convex solve (a working set when the sequential convex programme
   // leaves rows out), for benchmarks.
   int rows = 0;
-  double total_time = 0.0;       // T, seconds
-  double objective = 0.0;        // J = T + rho sum a^2 ds
+  double total_time = 0.0;              // T, seconds
+  double objective = 0.0;               // J = T + rho sum a^2 ds
   std::vector<double> piece_durations;  // seconds
   int iterations = 0;
   double solve_time_seconds = 0.0;  // solver only (building excluded)

@@ -46,8 +46,7 @@ class TemporalSolver {
   // message, iterations, solve_time_seconds and reduced_accuracy, adds the backend's own assembly
   // time to build_time_seconds, and on kOptimal sets *x to the d.num_vars free values. May throw
   // std::invalid_argument for a problem the backend cannot represent (reported as kInvalidInput).
-  virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result,
-                                std::vector<double>* x) = 0;
+  virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result, std::vector<double>* x) = 0;
   // How the backend takes the jerk limit (limits.max_jerk set): kLinearized, the sequential convex
   // programme (the SOCP backend); kExact, one solve with the non-convex cubic rows (Ipopt).
   virtual JerkRows jerk_rows() const { return JerkRows::kLinearized; }
@@ -158,6 +157,5 @@ void CheckTemporalMemory(const TemporalProblem& problem, TemporalBackend backend
 // none); ipopt_seconds, when set, caps Ipopt's CPU time (the ipopt backend's, or the fallback's).
 std::unique_ptr<TemporalSolver> MakeBudgetedTemporalSolver(TemporalBackend backend, std::int64_t max_memory_bytes,
                                                            std::optional<double> ipopt_seconds = std::nullopt);
-
 
 }  // namespace timeopt

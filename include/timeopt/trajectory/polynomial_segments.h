@@ -42,7 +42,7 @@ struct PolynomialFitOptions {
   // m/s^2, > 0: segments that span several cells smooth the jerk's steps, and their acceleration
   // may then leave the trajectory's (and its limits) by as much as this.
   double max_acceleration_error = 2e-2;
-  double check_rate_hz = 1000.0;     // Hz, > 0: the least density of the comparison
+  double check_rate_hz = 1000.0;  // Hz, > 0: the least density of the comparison
   // At most this many segments; more is std::invalid_argument (tolerances too tight for the
   // trajectory's length).
   int max_segments = 1000000;
@@ -64,11 +64,11 @@ struct PolynomialSegment {
 
 struct PolynomialSegments {
   std::vector<PolynomialSegment> segments;
-  int degree = 0;                    // the largest segment degree
-  double max_position_error = 0.0;   // m, bound over all times (see the header comment)
-  double max_velocity_error = 0.0;   // m/s, likewise
+  int degree = 0;                       // the largest segment degree
+  double max_position_error = 0.0;      // m, bound over all times (see the header comment)
+  double max_velocity_error = 0.0;      // m/s, likewise
   double max_acceleration_error = 0.0;  // m/s^2, likewise (first-order slack between compared times)
-  double largest_checked_gap = 0.0;  // s, the widest spacing of compared times
+  double largest_checked_gap = 0.0;     // s, the widest spacing of compared times
 };
 
 // Throws std::invalid_argument for bad options, or when a segment cannot meet the tolerances

@@ -20,7 +20,7 @@ namespace timeopt {
 inline constexpr double kDefaultSampleRateHz = 100.0;
 
 struct TrajectoryState {
-  double t = 0.0;  // s
+  double t = 0.0;                                          // s
   Eigen::Vector3d position = Eigen::Vector3d::Zero();      // m
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();      // m/s
   Eigen::Vector3d acceleration = Eigen::Vector3d::Zero();  // m/s^2

@@ -11,9 +11,9 @@
 namespace timeopt {
 
 struct SliceImageOptions {
-  int pixels_per_voxel = 4;    // image pixels per voxel edge (lowered for wide boxes)
-  int max_image_size = 4000;   // largest width or height of the map part, pixels
-  double max_distance = 0.0;   // distance at which the colour saturates, metres; 0: the slice's max
+  int pixels_per_voxel = 4;   // image pixels per voxel edge (lowered for wide boxes)
+  int max_image_size = 4000;  // largest width or height of the map part, pixels
+  double max_distance = 0.0;  // distance at which the colour saturates, metres; 0: the slice's max
 };
 
 // Samples the field at every voxel centre of the box in the plane z = `height` (metres) and writes

@@ -15,8 +15,8 @@ namespace timeopt {
 struct PlanImageOptions {
   // Height of the map slice, metres; NaN (default): the mean height of the trajectory.
   double slice_height = std::numeric_limits<double>::quiet_NaN();
-  int pixels_per_voxel = 4;   // image pixels per voxel edge (lowered for wide maps)
-  int max_image_size = 1600;  // largest width or height of the map part, pixels
+  int pixels_per_voxel = 4;       // image pixels per voxel edge (lowered for wide maps)
+  int max_image_size = 1600;      // largest width or height of the map part, pixels
   double sample_rate_hz = 100.0;  // trajectory samples drawn per second of flight (at most 1e5 in all)
   // The speed at the red end of the colour scale, m/s; NaN (default): the trajectory's own top
   // speed. Set it to compare pictures of several trajectories on one scale.

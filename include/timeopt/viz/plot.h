@@ -12,7 +12,7 @@ namespace timeopt {
 
 struct PlotSeries {
   std::string label;
-  std::vector<double> x, y;                 // same size
+  std::vector<double> x, y;  // same size
   std::array<double, 3> rgb = {0.1, 0.3, 0.8};
   bool dashed = false;
 };

@@ -11,7 +11,7 @@
 namespace timeopt {
 
 // Samples the trajectory at `samples` evenly spaced times (>= 2) and writes the plot.
-void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits,
-                         const std::string& path, int samples = 2000);
+void WriteProfilePlotPng(const Trajectory& trajectory, const VehicleLimits& limits, const std::string& path,
+                         int samples = 2000);
 
 }  // namespace timeopt
