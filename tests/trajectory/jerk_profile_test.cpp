@@ -118,6 +118,26 @@ TEST(JerkProfile, QuadraticCellTimesMatchQuadrature) {
   EXPECT_NEAR(OnePiece({0.0, 1.0, 0.0}, {CellShape::kQuadratic}).total_time(), kPi / 2.0, 4 * kEps);
 }
 
+// Cells whose b is constant up to rounding (values a few ulps apart, as an optimizer leaves them on
+// a cruise at the speed limit): c1, c2 and b'(h) are then all rounding, and a c2 taken apart from
+// the slopes made these cells' times 1.2e-9 relative off (a jerk-limited answer's T then differed
+// from its own profile's). Against quadrature, to the 1e-14 above.
+TEST(JerkProfile, CellsConstantUpToRoundingTakeTheirExactTime) {
+  const double ds = 0.5;
+  const std::vector<std::array<double, 3>> cells = {
+      {1.545716132050762e-05, 1.5457161320507616e-05, 1.545716132050762e-05},
+      {1.5457161320508572e-05, 1.5457161320507616e-05, 1.545716132050745e-05},
+      {1.5457161320507616e-05, 1.5457161320507616e-05, 1.545716132050764e-05},
+      {2.0, 2.0 - 4.0 * kEps, 2.0 + 2.0 * kEps}};
+  for (const auto& c : cells) {
+    const TemporalProfile profile =
+        OnePiece({c[0], c[1], c[2], c[1], c[0]}, {CellShape::kQuadratic, CellShape::kQuadratic});
+    const double truth = QuadratureTime(c[0], c[1], c[2], ds);
+    EXPECT_NEAR(profile.TimeAt(0, 1), truth, 1e-14 * truth) << c[0] << " " << c[1] << " " << c[2];
+    EXPECT_NEAR(profile.total_time() - profile.TimeAt(0, 1), truth, 1e-14 * truth);
+  }
+}
+
 TEST(JerkProfile, RestCellTimesMatchClosedFormAndQuadrature) {
   const double ds = 0.5;  // K = 2 cells
   for (double b_far : {1e-4, 0.3, 1.0, 7.5}) {
