@@ -102,21 +102,22 @@ TEST(Reliability, ABrakingStartThatCanBeFlownIsSolved) {
   // reference from that state (400 instants, within about 0.03% of the continuous optimum); the
   // certified answer is flyable, so not below it, and within 1% at K = 50 and 200 (measured +0.53%
   // and +0.52%: the profile class's loss on the cells through the braking phase; a uniform grid of
-  // K = 200 was +2.0%).
+  // K = 200 was +2.0%), within 3% at K = 20 (+2.48%; it had no answer before the cells after the
+  // first braking cell grew fast enough to reach the nominal cell).
   TemporalProblem p = Line(4.0, 3.0, 10.0, 50, ConstraintMode::kCertified);
   p.boundary.start_velocity = Eigen::Vector3d(0.5, 0, 0);
   p.boundary.start_acceleration = Eigen::Vector3d(-2.0, 0, 0);
   const auto ref = test_support::SolveTimeDomainReference(
       p.curve.piece(0), p.limits.max_velocity, p.limits.max_acceleration, *p.limits.max_jerk, 400, 0.05, -0.2);
   ASSERT_TRUE(ref.solved) << ref.message;
-  for (const int K : {50, 200}) {
+  for (const int K : {20, 50, 200}) {
     p.cells_per_piece = K;
     const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
     ASSERT_EQ(r.status, TemporalStatus::kOptimal) << "K " << K << ": " << r.message;
     std::printf("K = %d: T %.6f s, reference %.6f s (%+.3f%%)\n", K, r.total_time, ref.total_time,
                 100.0 * (r.total_time / ref.total_time - 1.0));
     EXPECT_GE(r.total_time, ref.total_time * (1.0 - 1e-3)) << "K " << K;
-    EXPECT_LE(r.total_time, ref.total_time * 1.01) << "K " << K;
+    EXPECT_LE(r.total_time, ref.total_time * (K >= 50 ? 1.01 : 1.03)) << "K " << K;
     EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6);
   }
   // At 0.15 m/s the speed reaches 0 while still braking (it needs a^2 / (2 j) = 0.2 m/s): the
