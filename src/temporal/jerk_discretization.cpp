@@ -1082,8 +1082,7 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
       if (rest.braking && K / 3 > 1) {
         growth = std::max(growth, std::pow(kBrakeGradingRoom * ds / g.back(), 1.0 / (K / 3 - 1)));
       }
-      for (double next = g.back() * (growth - 1.0); next < ds && static_cast<int>(g.size()) < K / 3;
-           next *= growth) {
+      for (double next = g.back() * (growth - 1.0); next < ds && static_cast<int>(g.size()) < K / 3; next *= growth) {
         g.push_back(next);
       }
       return g;

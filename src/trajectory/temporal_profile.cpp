@@ -33,8 +33,8 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 // The time integral of 1 / sqrt(b) over an interval of length L on which b = b_lo + slope_lo x +
 // c2 x^2 rises, its slope b' going from slope_lo >= 0 to slope_hi >= 0 (b_hi >= b_lo; c2 =
-// (slope_hi - slope_lo) / (2 L)). Infinite
-// when b_lo = 0 and slope_lo = 0 (b ~ c2 x^2 near x = 0, a log singularity).
+// (slope_hi - slope_lo) / (2 L)). Infinite when b_lo = 0 and slope_lo = 0 (b ~ c2 x^2 near x = 0,
+// a log singularity).
 //
 // Every term below is a sum of non-negative numbers, which is why callers reflect and split a cell
 // into rising pieces first: the textbook antiderivatives subtract nearly equal logarithms or
