@@ -50,14 +50,6 @@ TemporalBackend BackendFrom(const std::string& name) {
   return backend;
 }
 
-// A budget in bytes from max_memory_mb (0: none), or ValueError.
-std::int64_t TemporalBudget(double max_memory_mb) {
-  if (!(max_memory_mb >= 0.0) || !std::isfinite(max_memory_mb)) {
-    throw py::value_error("max_memory_mb: expected a number >= 0 (0: no budget)");
-  }
-  return static_cast<std::int64_t>(max_memory_mb * 1024 * 1024);
-}
-
 // ValueError ("max_memory_mb: ...") when the problem's estimated peak with this backend is above
 // the budget (> 0).
 void CheckTemporalBudget(const TemporalProblem& problem, TemporalBackend backend, std::int64_t budget) {
@@ -71,7 +63,7 @@ void CheckTemporalBudget(const TemporalProblem& problem, TemporalBackend backend
 // max_memory_mb > 0: a problem whose TemporalPeakBytes is above it raises ValueError before it is
 // solved, and the socp solver's Ipopt fallback keeps to it (as `timeopt temporal --max-memory`).
 TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& solver, double max_memory_mb) {
-  const std::int64_t budget = TemporalBudget(max_memory_mb);
+  const std::int64_t budget = BudgetBytes(max_memory_mb);
   const TemporalBackend backend = BackendFrom(solver);
   CheckTemporalBudget(problem, backend, budget);
   std::unique_ptr<TemporalSolver> s = MakeBudgetedTemporalSolver(backend, budget);
@@ -388,7 +380,7 @@ void BindTemporal(py::module_& m) {
       .def(py::init([](const std::string& solver, double max_memory_mb) {
              auto shared = std::make_unique<SharedSolver>();
              shared->backend = BackendFrom(solver);
-             shared->budget = TemporalBudget(max_memory_mb);
+             shared->budget = BudgetBytes(max_memory_mb);
              shared->solver = MakeBudgetedTemporalSolver(shared->backend, shared->budget);
              return shared;
            }),

@@ -196,9 +196,12 @@ inline ConstraintMode ModeFrom(const std::string& text) {
   return mode;
 }
 
-// A memory budget in MiB (0: none) as bytes, or a ValueError.
+// A memory budget in MiB (0: none) as bytes, or a ValueError (an infinite one would overflow the
+// conversion).
 inline int64_t BudgetBytes(double max_memory_mb) {
-  if (!(max_memory_mb >= 0.0)) throw py::value_error("max_memory_mb: expected >= 0 (0: no budget)");
+  if (!(max_memory_mb >= 0.0) || !std::isfinite(max_memory_mb)) {
+    throw py::value_error("max_memory_mb: expected a number >= 0 (0: no budget)");
+  }
   return static_cast<int64_t>(max_memory_mb * 1024 * 1024);
 }
 
