@@ -262,8 +262,12 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
 // 80 bytes (w0, w1 and jmax stored) they were 0.7 MB of the 10/50 benchmark's working memory.
 struct JerkRowTemplate {
   int g0 = 0;
-  std::int16_t rest_far = -1;
+  std::int8_t rest_far = -1;
   std::int8_t part = 0, parts = 1;
+  // 1 for a regular cell's coefficient of odd index below its last: a programme whose answer is
+  // only a linearization point may leave it out (the jerk is then bounded at every other
+  // coefficient).
+  std::int8_t thin = 0;
   std::array<double, 3> a{};
   std::array<double, 3> basis{};
   double w0() const { return static_cast<double>(part) / parts; }

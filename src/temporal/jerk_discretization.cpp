@@ -618,6 +618,7 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
         t.a[static_cast<size_t>(j)] = sign * w[j][i] / jmax;
         t.basis[static_cast<size_t>(j)] = c.basis_bernstein[j](i);
       }
+      t.thin = static_cast<std::int8_t>(i % 2 == 1 && i + 1 < size);
       c.templates->jerk_rows.push_back(t);
     }
   }
@@ -773,7 +774,7 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
             internal::JerkRowTemplate t;
             t.g0 = g0;
             if (rest != nullptr) {
-              t.rest_far = static_cast<std::int16_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
+              t.rest_far = static_cast<std::int8_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
               t.part = static_cast<std::int8_t>(part);
               t.parts = static_cast<std::int8_t>(parts);
             }

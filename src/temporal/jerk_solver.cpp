@@ -398,7 +398,10 @@ bool TouchesMarked(const internal::BandedRow& row, const std::vector<char>& mark
 // linearization is `linearization` (b at every half-grid value: the jerk-free certified optimum).
 // Each solve gets a working set (see the loop); an answer that violates a row left out is solved
 // again with it. False, with the reason in *why, when a solve does not end optimal: the general
-// path then decides, so statuses never depend on this one.
+// path then decides, so statuses never depend on this one. thin_jerk: a programme whose answer is
+// only a linearization point (the coarse one) leaves out the jerk rows marked `thin`, so it bounds
+// the jerk at every other Bernstein coefficient (m = 10, K = 50: its solve over 3,800 rows instead
+// of 4,750, in as many iterations, and the fine solve unchanged).
 struct StructuredScp {
   double build_seconds = 0.0, solve_seconds = 0.0;
   int iterations = 0, rows = 0;
@@ -410,7 +413,7 @@ struct StructuredScp {
 bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretization& d,
                         const internal::JerkTemplates& templates, std::vector<double> linearization,
                         const internal::BandedIpmSettings& settings, bool jerk_aware,
-                        internal::SolveWorkspace* workspace, StructuredScp* out) {
+                        internal::SolveWorkspace* workspace, StructuredScp* out, bool thin_jerk = false) {
   Clock::time_point start = Clock::now();
   // p: every row (in the workspace, whose memory the previous programme has touched already); a
   // solve takes the working set `keep` of them.
@@ -597,6 +600,11 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
     const bool every_jerk_row = h == 0 && !jerk_aware;
     const bool taken = take_waiting([&](size_t i, const FlatRow& r) {
       if (r.coef[0] <= 0.0 && r.coef[1] <= 0.0 && r.coef[2] <= 0.0) {  // holds for b >= 0
+        state[i] = kNone;
+        --waiting;
+        return false;
+      }
+      if (thin_jerk && i >= cell_rows && templates.jerk_rows[i - cell_rows].thin) {
         state[i] = kNone;
         --waiting;
         return false;
@@ -1051,7 +1059,7 @@ TemporalResult TemporalSolver::SolveJerkLimited(const TemporalProblem& problem) 
       std::vector<double> coarse_first = GridValues(dc, guess);
       CapAtBrakingEnds(coarse, dc, &coarse_first);
       const bool answered = SolveStructuredScp(coarse, dc, coarse_templates, std::move(coarse_first), coarse_settings,
-                                               false, &workspace, &scp);
+                                               false, &workspace, &scp, true);
       build_time += scp.build_seconds;
       solve_time += scp.solve_seconds;
       iterations += scp.iterations;
