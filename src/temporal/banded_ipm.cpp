@@ -1112,11 +1112,13 @@ bool BuildBandedProblem(const TemporalDiscretization& d, BandedProblem* out, std
     if (std::isfinite(r.lower)) fits = p.AddRow(r.terms, -1.0, r.lower) && fits;
     p.kind = -1;
   }
+  p.kind = kCapKind;
   for (int v = 0; v < d.num_vars; ++v) {
     single[0] = {v, 1.0};
     if (std::isfinite(d.var_upper[static_cast<size_t>(v)]))
-      fits = p.AddRow(single, 1.0, d.var_upper[static_cast<size_t>(v)], true) && fits;
+      fits = p.AddRow(single, 1.0, d.var_upper[static_cast<size_t>(v)], !p.controls) && fits;
   }
+  p.kind = -1;
   if (!fits) {
     *why = "a row over more than four unknowns, or a constant row violated";
     return false;

@@ -70,10 +70,14 @@ BandedIpmOutcome SolveBanded(const TemporalDiscretization& d, const BandedIpmSet
 // unknowns and scaled so that h is +-1 or 0, the first n of them the bounds -y <= 0, and the
 // cells' time terms with b as forms in y.
 inline constexpr int kMaxRowSpan = ControlForm::kMaxTerms;
+// The kind of the rows x_v <= var_upper_v (the point velocity bounds). With control values they
+// are not essential: a solve takes them when they are near their bound, and an answer that violates
+// one is solved again with it.
+inline constexpr short kCapKind = -2;
 struct BandedRow {
   int first = 0;
   short count = 0;
-  short kind = -1;  // the LinearRow::Kind it came from (-1: a bound of the unknowns)
+  short kind = -1;  // the LinearRow::Kind it came from (-1: a bound of the unknowns; kCapKind)
   double v[kMaxRowSpan] = {};
   double Value(const std::vector<double>& y) const {
     double value = 0.0;

@@ -433,7 +433,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   const size_t cell_rows = templates.cell_rows.size();
   // Room for every row at once: one allocation, not a copy of ~1 MB per growth.
   p.Reserve(p.rows.size() + cell_rows + templates.jerk_rows.size());
-  // The upper bound of each control that the essential rows give alone (with y >= 0). A control
+  // The upper bound of each control that the essential rows and the point velocity bounds
+  // (kCapKind, which a working set takes only near their bound) give alone (with y >= 0). A control
   // whose bound is far above its value (kLooseBound times) is held only by rows a working set
   // may leave out (a boundary value where the tangent and the curvature vanish is held only by
   // its cell's jerk rows), and a solve without them runs off towards infinite speed there: the
@@ -441,7 +442,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   std::vector<double> essential_bound(static_cast<size_t>(p.n), std::numeric_limits<double>::infinity());
   for (size_t r = 0; r < p.rows.size(); ++r) {
     const internal::BandedRow& row = p.rows[r];
-    if (!p.essential[r] || !(p.h[r] > 0.0)) continue;
+    if (!(p.essential[r] || p.rows[r].kind == internal::kCapKind) || !(p.h[r] > 0.0)) continue;
     bool nonnegative = true;
     for (int t = 0; t < row.count; ++t) nonnegative = nonnegative && row.v[t] >= 0.0;
     if (!nonnegative) continue;
