@@ -178,6 +178,7 @@ struct SolveWorkspace {
   std::vector<char> row_state;                    // per template row: waiting, in the problem, or none
   std::vector<WaitingRow> waiting_rows;           // per template row
   std::vector<double> multipliers;                // per row id (SolveStructuredScp's z_by_id)
+  std::vector<double> group_best;                 // per template cell row (SolveStructuredScp)
   std::vector<BandedProblem::CellMap> cell_maps;  // per grid value (by a cell's first)
 };
 

@@ -283,6 +283,7 @@ struct GridRow {
 struct JerkTemplates {
   std::vector<GridRow> cell_rows;          // the regular cells' velocity and acceleration rows
   std::vector<JerkRowTemplate> jerk_rows;  // their jerk rows, one per Bernstein coefficient, axis and sign
+  std::vector<int> cells;                  // the first grid value (g0) of every cell with rows above
 };
 // For the structured path: the jerk-limited discretization without the regular cells' velocity,
 // acceleration and jerk rows (JerkRows::kNone otherwise), which go to *templates instead, over grid

@@ -635,6 +635,7 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
   const int g0 = c.Half(piece, 2 * k);
   const TemporalLimits& limits = c.problem.limits;
   const double ds = c.Len(piece, k);
+  if (c.templates != nullptr && mode == JerkRows::kNone) c.templates->cells.push_back(g0);
   if (rest == nullptr) {
     // b >= 0 on the whole cell: its Bernstein coefficients b0, 2 bm - (b0 + b1) / 2, b1 (the end
     // values are >= 0 already).
@@ -1233,6 +1234,7 @@ TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& pro
   // Emptied, keeping their memory (a solver keeps its templates from one solve to the next).
   templates->cell_rows.clear();
   templates->jerk_rows.clear();
+  templates->cells.clear();
   // Room for a regular cell's rows at the curve's largest degree, so that the vectors seldom grow
   // (each growth copied them and touched fresh pages: on the default plan both grew once): with
   // f' of degree dq, 3 (2 dq + 3) velocity and 6 (dq + 2) acceleration rows at most, and 6 (dq + 1)
