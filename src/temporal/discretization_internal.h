@@ -227,6 +227,10 @@ void MakeCells(const TemporalProblem& problem, TemporalDiscretization* out);
 // or into rest some acceleration along the path left (max_thrust = g on a level start leaves
 // none). Sets d->infeasible_reason if not.
 void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscretization* d);
+// The paper's or certified mode's rows of every cell over (b^k, b^{k+1}) (cell_rows.cpp), with
+// mid_acc the curve's acceleration factors at each cell's middle (MidCellAccelerations).
+void AddCellRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix<double, 3, 2>>& mid_acc,
+                 RowBuilder& row, TemporalDiscretization* out);
 // Keeps, per variable, only the tightest row that bounds it alone, as its upper bound.
 void KeepTightestUpperBounds(TemporalDiscretization* d);
 // The boundary speeds made free (DiscretizeWithFreeBoundaries): for the start and the end, the
