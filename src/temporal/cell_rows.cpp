@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -138,6 +139,102 @@ void ThinCellRows(std::vector<CellRow>* rows, double tolerance) {
   r.assign(out.begin(), out.end());
 }
 
+// The paper's rows of one cell: per axis, the acceleration at the cell's middle, both signs.
+void AddPaperCellRows(const TemporalLimits& limits, const Eigen::Matrix<double, 3, 2>& mid_acc,
+                      std::vector<CellRow>* rows) {
+  for (int a = 0; a < 3; ++a) {
+    const double amax = limits.max_acceleration(a);
+    const Eigen::Vector2d w(mid_acc(a, 0) / amax, mid_acc(a, 1) / amax);
+    rows->push_back({w, LinearRow::Kind::kAcceleration});
+    rows->push_back({-w, LinearRow::Kind::kAcceleration});
+  }
+}
+
+// What certified mode's cell rows gather over the axes for the quadrotor's limits: the speed's
+// square (sum over axes of f'^2) and the acceleration's Bernstein control points (coefficients on
+// b0 and b1).
+struct CertifiedCell {
+  SmallPoly speed2;
+  std::vector<Eigen::Vector3d> control0, control1;
+};
+
+// Certified mode's rows of cell k (of length ds) of a piece on axis a, from the piece's first and
+// second derivatives: the Bernstein coefficients of velocity and acceleration over the whole cell.
+void AddCertifiedAxisRows(const TemporalLimits& limits, const PolynomialPiece::Coefficients& first_derivative,
+                          const PolynomialPiece::Coefficients& second_derivative, int k, double ds, int a,
+                          bool quadrotor, BernsteinTable& bernstein, CertifiedCell* cell, std::vector<CellRow>* rows) {
+  const double amax = limits.max_acceleration(a);
+  const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
+  // Certified velocity: Bernstein coefficients of f'(s(u))^2 ((1 - u) b0 + u b1).
+  const SmallPoly q = Shifted(first_derivative.row(a).transpose(), k * ds, ds);
+  const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
+  if (limits.max_speed) {
+    const SmallPoly q2 = Multiply(q, q);
+    const int size = static_cast<int>(std::max(cell->speed2.size(), q2.size()));
+    cell->speed2 = Padded(cell->speed2, size) + Padded(q2, size);
+  }
+  if (q.cwiseAbs().maxCoeff() > 0.0 && std::isfinite(vmax2)) {
+    const SmallPoly q2 = Multiply(q, q);
+    SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
+    SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
+    // The end coefficients are f'^2 b at the grid points; the other grid value's weight there
+    // is zero exactly (not up to the rounding of the conversion).
+    w0(w0.size() - 1) = 0.0;
+    w1(0) = 0.0;
+    for (int j = 0; j < w0.size(); ++j) {
+      rows->push_back({Eigen::Vector2d(w0(j), w1(j)) / vmax2, LinearRow::Kind::kVelocity});
+    }
+  }
+  // Certified acceleration: f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
+  const SmallPoly p2 = Shifted(second_derivative.row(a).transpose(), k * ds, ds);
+  const SmallPoly p2a = Multiply(p2, one_minus_u);
+  const SmallPoly p2b = Multiply(p2, u);
+  const int size = static_cast<int>(std::max(q.size(), p2a.size()));
+  const SmallPoly c0 = bernstein.Convert(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
+  const SmallPoly c1 = bernstein.Convert(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
+  if (quadrotor) {
+    if (a == 0) {
+      cell->control0.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
+      cell->control1.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
+    }
+    for (int j = 0; j < size; ++j) {
+      cell->control0[static_cast<size_t>(j)](a) = c0(j);
+      cell->control1[static_cast<size_t>(j)](a) = c1(j);
+    }
+  }
+  if (!std::isfinite(amax)) return;  // no limit on this axis
+  for (int j = 0; j < size; ++j) {
+    const Eigen::Vector2d w(c0(j) / amax, c1(j) / amax);
+    rows->push_back({w, LinearRow::Kind::kAcceleration});
+    rows->push_back({-w, LinearRow::Kind::kAcceleration});
+  }
+}
+
+// Certified mode's quadrotor rows of a cell over grid values `cell_grid`: the acceleration's
+// control points within the (convex) cones, which bounds the whole cell since the acceleration
+// curve lies in their convex hull, into `row` directly; the speed's Bernstein coefficients into
+// *rows.
+void AddCertifiedQuadrotorRows(const TemporalLimits& limits, const CertifiedCell& cell,
+                               const std::vector<int>& cell_grid, const std::function<std::string()>& where,
+                               BernsteinTable& bernstein, RowBuilder& row, TemporalDiscretization* d,
+                               std::vector<CellRow>* rows) {
+  for (size_t j = 0; j < cell.control0.size(); ++j) {
+    AddQuadrotorAccelerationRows(limits, cell_grid, {cell.control0[j], cell.control1[j]}, where, row, d);
+  }
+  if (limits.max_speed && cell.speed2.cwiseAbs().maxCoeff() > 0.0) {
+    // Certified speed: Bernstein coefficients of |f'(s(u))|^2 ((1 - u) b0 + u b1).
+    const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
+    SmallPoly w0 = bernstein.Convert(Multiply(cell.speed2, one_minus_u));
+    SmallPoly w1 = bernstein.Convert(Multiply(cell.speed2, u));
+    w0(w0.size() - 1) = 0.0;
+    w1(0) = 0.0;
+    const double s2 = *limits.max_speed * *limits.max_speed;
+    for (int j = 0; j < w0.size(); ++j) {
+      rows->push_back({Eigen::Vector2d(w0(j), w1(j)) / s2, LinearRow::Kind::kVelocity});
+    }
+  }
+}
+
 }  // namespace
 
 // Per-cell rows over (b^k, b^{k+1}): the paper's acceleration at the cell middle, or certified
@@ -149,7 +246,7 @@ void AddCellRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix
   const int m = curve.num_pieces();
   const double ds = 1.0 / problem.cells_per_piece;
   const TemporalLimits& limits = problem.limits;
-  const auto vmax2 = limits.max_velocity.cwiseProduct(limits.max_velocity);
+  const bool certified = problem.constraint_mode == ConstraintMode::kCertified;
   // Every velocity and acceleration row of a cell involves only its two grid values, so after
   // dividing by its limit it reads w . (b^k, b^{k+1}) <= 1. With b >= 0 only the rows on the
   // upper-right convex hull of the points w can be active (see PruneCellRows); the others are
@@ -157,7 +254,7 @@ void AddCellRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix
   std::vector<CellRow> cell_rows;
   std::vector<PolynomialPiece::Coefficients> first_derivative, second_derivative;
   BernsteinTable bernstein;
-  if (problem.constraint_mode == ConstraintMode::kCertified) {
+  if (certified) {
     for (int i = 0; i < m; ++i) {
       if (curve.piece(i).degree() > 30) {
         throw std::invalid_argument("curve piece " + std::to_string(i) + " has degree " +
@@ -168,95 +265,32 @@ void AddCellRows(const TemporalProblem& problem, const std::vector<Eigen::Matrix
     }
   }
   const bool quadrotor = limits.HasNormLimits();
-  // Certified mode with the quadrotor's limits: sum over axes of f'^2 (the speed), and the
-  // acceleration's Bernstein control points per axis (coefficients on b0 and b1).
-  SmallPoly speed2;
-  std::vector<Eigen::Vector3d> control0, control1;
+  CertifiedCell certified_cell;
   for (size_t ci = 0; ci < d.cells.size(); ++ci) {
     const Cell& c = d.cells[ci];
     const int k = c.first_grid - d.GridIndex(c.piece, 0);
     cell_rows.clear();
     const std::vector<int> cell_grid = {c.first_grid, c.first_grid + 1};
-    const auto where = [&] { return "piece " + std::to_string(c.piece) + " cell " + std::to_string(k); };
-    if (quadrotor && problem.constraint_mode == ConstraintMode::kPaper) {
-      AddQuadrotorAccelerationRows(limits, cell_grid, {mid_acc[ci].col(0), mid_acc[ci].col(1)}, where, row, &d);
-    }
-    speed2 = SmallPoly::Zero(1);
-    for (int a = 0; a < 3; ++a) {
-      const double amax = limits.max_acceleration(a);
-      if (problem.constraint_mode == ConstraintMode::kPaper) {
-        const Eigen::Vector2d w(mid_acc[ci](a, 0) / amax, mid_acc[ci](a, 1) / amax);
-        cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
-        cell_rows.push_back({-w, LinearRow::Kind::kAcceleration});
-        continue;
-      }
-      // Certified velocity: Bernstein coefficients of f'(s(u))^2 ((1 - u) b0 + u b1).
-      const SmallPoly q = Shifted(first_derivative[c.piece].row(a).transpose(), k * ds, ds);
-      const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
-      if (limits.max_speed) {
-        const SmallPoly q2 = Multiply(q, q);
-        const int size = static_cast<int>(std::max(speed2.size(), q2.size()));
-        speed2 = Padded(speed2, size) + Padded(q2, size);
-      }
-      if (q.cwiseAbs().maxCoeff() > 0.0 && std::isfinite(vmax2(a))) {
-        const SmallPoly q2 = Multiply(q, q);
-        SmallPoly w0 = bernstein.Convert(Multiply(q2, one_minus_u));
-        SmallPoly w1 = bernstein.Convert(Multiply(q2, u));
-        // The end coefficients are f'^2 b at the grid points; the other grid value's weight there
-        // is zero exactly (not up to the rounding of the conversion).
-        w0(w0.size() - 1) = 0.0;
-        w1(0) = 0.0;
-        for (int j = 0; j < w0.size(); ++j) {
-          cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / vmax2(a), LinearRow::Kind::kVelocity});
-        }
-      }
-      // Certified acceleration: f'(s(u)) (b1 - b0) / (2 ds) + f''(s(u)) ((1 - u) b0 + u b1).
-      const SmallPoly p2 = Shifted(second_derivative[c.piece].row(a).transpose(), k * ds, ds);
-      const SmallPoly p2a = Multiply(p2, one_minus_u);
-      const SmallPoly p2b = Multiply(p2, u);
-      const int size = static_cast<int>(std::max(q.size(), p2a.size()));
-      const SmallPoly c0 = bernstein.Convert(Padded(-q / (2.0 * ds), size) + Padded(p2a, size));
-      const SmallPoly c1 = bernstein.Convert(Padded(q / (2.0 * ds), size) + Padded(p2b, size));
+    const std::function<std::string()> where = [&] {
+      return "piece " + std::to_string(c.piece) + " cell " + std::to_string(k);
+    };
+    if (!certified) {
       if (quadrotor) {
-        if (a == 0) {
-          control0.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
-          control1.assign(static_cast<size_t>(size), Eigen::Vector3d::Zero());
-        }
-        for (int j = 0; j < size; ++j) {
-          control0[static_cast<size_t>(j)](a) = c0(j);
-          control1[static_cast<size_t>(j)](a) = c1(j);
-        }
+        AddQuadrotorAccelerationRows(limits, cell_grid, {mid_acc[ci].col(0), mid_acc[ci].col(1)}, where, row, &d);
       }
-      if (!std::isfinite(amax)) continue;  // no limit on this axis
-      for (int j = 0; j < size; ++j) {
-        const Eigen::Vector2d w(c0(j) / amax, c1(j) / amax);
-        cell_rows.push_back({w, LinearRow::Kind::kAcceleration});
-        cell_rows.push_back({-w, LinearRow::Kind::kAcceleration});
+      AddPaperCellRows(limits, mid_acc[ci], &cell_rows);
+    } else {
+      certified_cell.speed2 = SmallPoly::Zero(1);
+      for (int a = 0; a < 3; ++a) {
+        AddCertifiedAxisRows(limits, first_derivative[static_cast<size_t>(c.piece)],
+                             second_derivative[static_cast<size_t>(c.piece)], k, ds, a, quadrotor, bernstein,
+                             &certified_cell, &cell_rows);
       }
-    }
-    if (problem.constraint_mode == ConstraintMode::kCertified && quadrotor) {
-      // The acceleration curve lies in the convex hull of its control points, so bounding every
-      // control point by the (convex) cones bounds the whole cell.
-      for (size_t j = 0; j < control0.size(); ++j) {
-        AddQuadrotorAccelerationRows(limits, cell_grid, {control0[j], control1[j]}, where, row, &d);
-      }
-      if (limits.max_speed && speed2.cwiseAbs().maxCoeff() > 0.0) {
-        // Certified speed: Bernstein coefficients of |f'(s(u))|^2 ((1 - u) b0 + u b1).
-        const SmallPoly one_minus_u = Eigen::Vector2d(1.0, -1.0), u = Eigen::Vector2d(0.0, 1.0);
-        SmallPoly w0 = bernstein.Convert(Multiply(speed2, one_minus_u));
-        SmallPoly w1 = bernstein.Convert(Multiply(speed2, u));
-        w0(w0.size() - 1) = 0.0;
-        w1(0) = 0.0;
-        const double s2 = *limits.max_speed * *limits.max_speed;
-        for (int j = 0; j < w0.size(); ++j) {
-          cell_rows.push_back({Eigen::Vector2d(w0(j), w1(j)) / s2, LinearRow::Kind::kVelocity});
-        }
-      }
+      if (quadrotor)
+        AddCertifiedQuadrotorRows(limits, certified_cell, cell_grid, where, bernstein, row, &d, &cell_rows);
     }
     if (problem.prune_redundant_rows) PruneCellRows(&cell_rows);
-    if (problem.constraint_mode == ConstraintMode::kCertified && problem.prune_redundant_rows) {
-      ThinCellRows(&cell_rows, problem.certified_thinning);
-    }
+    if (certified && problem.prune_redundant_rows) ThinCellRows(&cell_rows, problem.certified_thinning);
     for (const CellRow& r : cell_rows) {
       if (r.w(0) <= 0.0 && r.w(1) <= 0.0) continue;  // holds for every b >= 0
       row.Add(c.first_grid, r.w(0));
