@@ -18,6 +18,7 @@
 namespace timeopt {
 namespace internal {
 struct SolveWorkspace;
+class JerkLimitedSolve;
 }  // namespace internal
 
 // The one skeleton of both backends. Solve() (not virtual) validates and discretizes the problem,
@@ -61,6 +62,7 @@ class TemporalSolver {
   virtual int structured_jerk_iterations() const { return 0; }
 
  private:
+  friend class internal::JerkLimitedSolve;  // SolveJerkLimited's steps (jerk_solver.cpp)
   // limits.max_jerk set: the sequential convex programme over DiscretizeJerkLimited, or one solve
   // of its exact rows (jerk_solver.cpp).
   TemporalResult SolveJerkLimited(const TemporalProblem& problem);
