@@ -372,7 +372,8 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
         for (e = b; e < cell_rows && templates.cell_rows[e].g0 == first_row.g0 &&
                     templates.cell_rows[e].kind == first_row.kind;
              ++e) {
-          best_value = std::max(best_value, row_value(flat[e]) / flat[e].H);
+          if (flat[e].H > 0.0)
+            best_value = std::max(best_value, row_value(flat[e]) / flat[e].H);  // (H <= 0: taken anyway)
         }
         std::fill(group_best.begin() + static_cast<std::ptrdiff_t>(b),
                   group_best.begin() + static_cast<std::ptrdiff_t>(e), best_value);
