@@ -266,6 +266,173 @@ Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
   return result;
 }
 
+namespace {
+
+// Reports a stage to options.on_stage, if set.
+void Report(const PlannerOptions& options, const char* stage, double ms, const std::string& outcome) {
+  if (options.on_stage) options.on_stage(stage, ms, outcome);
+}
+
+// The start state the plan flies from. A vehicle tracking at its limits overshoots them by a
+// fraction of a percent (the flight criterion allows 1%): a start state a little over them is
+// scaled onto them, or no profile could start there. More than 1% over is taken as given (and the
+// temporal stage says why it cannot be flown, or relaxes it).
+struct StartState {
+  bool moving = false;
+  Eigen::Vector3d velocity, acceleration;
+};
+StartState StartOnLimits(const PlannerOptions& options) {
+  const auto onto_limits = [](const Eigen::Vector3d& value, const Eigen::Vector3d& per_axis,
+                              const std::optional<double>& norm) {
+    double factor = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (std::abs(value(a)) > per_axis(a)) factor = std::min(factor, per_axis(a) / std::abs(value(a)));
+    }
+    if (norm && value.norm() > *norm) factor = std::min(factor, *norm / value.norm());
+    return factor >= 1.0 / 1.01 ? Eigen::Vector3d(value * factor) : value;
+  };
+  StartState start;
+  start.moving = !options.start_velocity.isZero(0.0) || !options.start_acceleration.isZero(0.0);
+  start.velocity = onto_limits(options.start_velocity, options.limits.max_velocity, options.limits.max_speed);
+  start.acceleration =
+      onto_limits(options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
+  return start;
+}
+
+// A start in motion: in s, f'(0) = v0 tau and f''(0) = a0 tau^2 give sdot = 1 / tau, the velocity
+// v0 and (with sddot = 0) the acceleration a0. tau: the first piece (after splitting) at the start
+// speed, so that f' matches the piece's chord (at the velocity limit for a start at rest with an
+// acceleration).
+void HoldStart(const StartState& start, const PlannerOptions& options, const Waypoints& joints,
+               SpatialOptimizerOptions* attempt) {
+  if (!start.moving) return;
+  const double first = joints.cols() > 1 ? (joints.col(1) - joints.col(0)).norm() : 1.0;
+  const double speed = start.velocity.norm() > 0.0 ? start.velocity.norm() : options.limits.max_velocity.minCoeff();
+  const double tau = attempt->formulation == SpatialFormulation::kTimeCoupled ? 1.0 : std::max(first, 1e-3) / speed;
+  attempt->start_tangent = start.velocity * tau;
+  attempt->start_curvature = start.acceleration * tau * tau;
+}
+
+// The pieces of the last attempt (the shortest segments), counted before any is made: a
+// max_segment_length of 1e-9 m asked for 3e10 of them (3.2 GB before the allocation failed).
+// Returns the error, or "" when the count is within kMaxPlanPieces.
+std::string PieceCountError(const Waypoints& path, const PlannerOptions& options) {
+  const double shortest = options.max_segment_length / std::pow(2.0, options.max_attempts - 1);
+  double pieces = 0.0;
+  for (Eigen::Index i = 0; i + 1 < path.cols(); ++i) {
+    pieces += SegmentParts((path.col(i + 1) - path.col(i)).norm(), shortest);
+  }
+  if (pieces <= kMaxPlanPieces) return "";
+  std::ostringstream message;
+  message << "options.max_segment_length: " << options.max_segment_length << " m splits the path into about " << pieces
+          << " pieces by the last of " << options.max_attempts << " attempts, above the cap of " << kMaxPlanPieces
+          << " (a longer max_segment_length)";
+  return message.str();
+}
+
+// The spatial stage with its clearance post-check and retries (each with a larger collision weight
+// and pieces half as long). Fills result's spatial, curve, min_clearance, spatial_attempts and
+// times; returns kSuccess, or the failure with its message.
+PlanStatus SpatialStage(const Esdf& esdf, const Eigen::Vector3d& start_point, const Eigen::Vector3d& goal,
+                        const Waypoints& path, const StartState& start, const PlannerOptions& options, PlanResult* out,
+                        std::string* message) {
+  PlanResult& result = *out;
+  SpatialOptimizerOptions spatial = options.spatial;
+  spatial.safe_distance = options.robot_radius + options.safety_margin;
+  if (spatial.formulation == SpatialFormulation::kTimeCoupled) {
+    spatial.max_velocity = options.limits.max_velocity.minCoeff();
+    spatial.max_acceleration = options.limits.max_acceleration.minCoeff();
+  }
+  // Exact against the voxels where the field is below radius + check margin; between samples the
+  // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
+  // less than radius + half a step lowers the requirement to its own clearance (never below the
+  // radius).
+  const double exact_below = options.robot_radius + options.clearance_check_margin;
+  const double half_step = 0.5 * options.clearance_check_step;
+  const double required = std::max(
+      options.robot_radius, std::min({options.robot_radius + half_step, VoxelClearance(esdf, start_point, exact_below),
+                                      VoxelClearance(esdf, goal, exact_below)}));
+  bool safe = false;
+  for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
+    const double factor = std::pow(options.retry_collision_weight_factor, attempt);
+    SpatialOptimizerOptions attempt_options = spatial;
+    attempt_options.collision_weight = std::min(kMaxSpatialWeight, spatial.collision_weight * factor);
+    const Waypoints joints = SplitSegments(path, options.max_segment_length / std::pow(2.0, attempt));
+    HoldStart(start, options, joints, &attempt_options);
+    auto t = Clock::now();
+    result.spatial = OptimizeSpatialCurve(esdf, joints, attempt_options);
+    result.times.spatial_ms += MillisecondsSince(t);
+    result.spatial_attempts = attempt + 1;
+    Report(options, "spatial", MillisecondsSince(t),
+           "attempt " + std::to_string(attempt + 1) + ", " + std::to_string(joints.cols() - 1) + " pieces, " +
+               std::to_string(result.spatial.iterations.size()) + " iterations, " + ToString(result.spatial.status));
+    if (!result.spatial.is_usable()) {
+      *message =
+          std::string("spatial optimization: ") + ToString(result.spatial.status) + ": " + result.spatial.message;
+      return PlanStatus::kSpatialFailure;
+    }
+    result.curve = result.spatial.curve;
+    // A piece longer than twice the field's diagonal has run away (it cannot stay in the field),
+    // and its dense check would need a sample count without bound.
+    const Eigen::AlignedBox3d field = esdf.box().Metric(esdf.resolution());
+    const double reach = 2.0 * field.diagonal().norm() + 1.0;
+    for (int i = 0; i < result.curve.num_pieces(); ++i) {
+      const double length = PolylineLength(result.curve.piece(i));
+      if (!(length <= reach)) {
+        std::ostringstream s;
+        s << "the optimized curve ran away: piece " << i << " is " << length
+          << " m long, more than twice the distance field's diagonal (" << field.diagonal().norm() << " m)";
+        *message = s.str();
+        return PlanStatus::kSpatialFailure;
+      }
+    }
+    t = Clock::now();
+    result.min_clearance = MinVoxelClearance(esdf, result.curve, options.clearance_check_step, exact_below);
+    safe = result.min_clearance >= required;
+    if (!safe && result.min_clearance >= options.robot_radius) {
+      // Above the radius at the samples but within half a step of it: a check 8 times denser
+      // needs only 1/8 of the half-step margin (the curve may be fine in a tight gap).
+      const double fine_step = options.clearance_check_step / 8.0;
+      result.min_clearance = MinVoxelClearance(esdf, result.curve, fine_step, exact_below);
+      safe = result.min_clearance >=
+             std::max(options.robot_radius, std::min(required, options.robot_radius + 0.5 * fine_step));
+    }
+    result.times.check_ms += MillisecondsSince(t);
+    std::ostringstream outcome;
+    outcome << "clearance " << result.min_clearance << " m (required " << required << " m)";
+    Report(options, "check", MillisecondsSince(t), outcome.str());
+  }
+  result.path_length = result.curve.ArcLength(1e-6);
+  if (!safe) {
+    std::ostringstream s;
+    s << "the optimized curve comes within " << result.min_clearance << " m of an obstacle (required: " << required
+      << " m) after " << result.spatial_attempts << " attempts";
+    *message = s.str();
+    return PlanStatus::kCollision;
+  }
+  return PlanStatus::kSuccess;
+}
+
+// The plan's status and message for the temporal stage's result.
+PlanStatus FromTemporal(const TemporalResult& temporal, std::string* message) {
+  switch (temporal.status) {
+    case TemporalStatus::kOptimal:
+      *message = "";
+      return PlanStatus::kSuccess;
+    case TemporalStatus::kInfeasible:
+      *message = "temporal stage: " + temporal.message;
+      return PlanStatus::kTemporalInfeasible;
+    case TemporalStatus::kInvalidInput:
+      *message = "temporal stage: " + temporal.message;
+      return PlanStatus::kInvalidInput;
+    default:
+      *message = std::string("temporal stage: ") + ToString(temporal.status) + ": " + temporal.message;
+      return PlanStatus::kTemporalFailure;
+  }
+}
+
+}  // namespace
+
 Planner::Planner(const Esdf& esdf) : esdf_(&esdf), search_(esdf) {}
 
 PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, const PlannerOptions& options) {
@@ -293,131 +460,19 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   auto t = Clock::now();
   const PathSearchResult path = search_.Search(start, goal, search);
   result.times.search_ms = MillisecondsSince(t);
-  const auto report = [&options](const char* stage, double ms, const std::string& outcome) {
-    if (options.on_stage) options.on_stage(stage, ms, outcome);
-  };
-  report("search", result.times.search_ms,
+  Report(options, "search", result.times.search_ms,
          path.is_success() ? std::to_string(path.waypoints.cols()) + " waypoints" : path.message);
   if (!path.is_success()) return finish(FromSearch(path.status), path.message);
   result.waypoints = path.waypoints;
 
   // ---- spatial stage with post-check and retries ----
-  SpatialOptimizerOptions spatial = options.spatial;
-  spatial.safe_distance = options.robot_radius + options.safety_margin;
-  if (spatial.formulation == SpatialFormulation::kTimeCoupled) {
-    spatial.max_velocity = options.limits.max_velocity.minCoeff();
-    spatial.max_acceleration = options.limits.max_acceleration.minCoeff();
+  const StartState held = StartOnLimits(options);
+  if (std::string too_many = PieceCountError(path.waypoints, options); !too_many.empty()) {
+    return finish(PlanStatus::kInvalidInput, too_many);
   }
-  // A start in motion: in s, f'(0) = v0 tau and f''(0) = a0 tau^2 give sdot = 1 / tau, the
-  // velocity v0 and (with sddot = 0) the acceleration a0. tau: the first front-end segment at the
-  // start speed (at the velocity limit for a start at rest with an acceleration).
-  const bool moving = !options.start_velocity.isZero(0.0) || !options.start_acceleration.isZero(0.0);
-  // A vehicle tracking at its limits overshoots them by a fraction of a percent (the flight
-  // criterion allows 1%): a start state a little over them is scaled onto them, or no profile
-  // could start there. More than 1% over is taken as given (and the temporal stage says why it
-  // cannot be flown, or relaxes it).
-  const auto onto_limits = [](const Eigen::Vector3d& value, const Eigen::Vector3d& per_axis,
-                              const std::optional<double>& norm) {
-    double factor = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      if (std::abs(value(a)) > per_axis(a)) factor = std::min(factor, per_axis(a) / std::abs(value(a)));
-    }
-    if (norm && value.norm() > *norm) factor = std::min(factor, *norm / value.norm());
-    return factor >= 1.0 / 1.01 ? Eigen::Vector3d(value * factor) : value;
-  };
-  const Eigen::Vector3d start_velocity =
-      onto_limits(options.start_velocity, options.limits.max_velocity, options.limits.max_speed);
-  const Eigen::Vector3d start_acceleration =
-      onto_limits(options.start_acceleration, options.limits.max_acceleration, options.limits.max_acceleration_norm);
-  // tau: the first piece (after splitting) at the start speed, so that f' matches the piece's chord.
-  const auto hold_start = [&](const Waypoints& joints, SpatialOptimizerOptions* attempt_options) {
-    if (!moving) return;
-    const double first = joints.cols() > 1 ? (joints.col(1) - joints.col(0)).norm() : 1.0;
-    const double speed = start_velocity.norm() > 0.0 ? start_velocity.norm() : options.limits.max_velocity.minCoeff();
-    const double tau = spatial.formulation == SpatialFormulation::kTimeCoupled ? 1.0 : std::max(first, 1e-3) / speed;
-    attempt_options->start_tangent = start_velocity * tau;
-    attempt_options->start_curvature = start_acceleration * tau * tau;
-  };
-  // Exact against the voxels where the field is below radius + check margin; between samples the
-  // clearance can drop by half a step. The end points are fixed: a start or goal that itself has
-  // less than radius + half a step lowers the requirement to its own clearance (never below the
-  // radius).
-  const double exact_below = options.robot_radius + options.clearance_check_margin;
-  const double half_step = 0.5 * options.clearance_check_step;
-  const double required = std::max(
-      options.robot_radius, std::min({options.robot_radius + half_step, VoxelClearance(*esdf_, start, exact_below),
-                                      VoxelClearance(*esdf_, goal, exact_below)}));
-  {
-    // The pieces of the last attempt (the shortest segments), counted before any is made: a
-    // max_segment_length of 1e-9 m asked for 3e10 of them (3.2 GB before the allocation failed).
-    const double shortest = options.max_segment_length / std::pow(2.0, options.max_attempts - 1);
-    double pieces = 0.0;
-    for (Eigen::Index i = 0; i + 1 < path.waypoints.cols(); ++i) {
-      pieces += SegmentParts((path.waypoints.col(i + 1) - path.waypoints.col(i)).norm(), shortest);
-    }
-    if (!(pieces <= kMaxPlanPieces)) {
-      std::ostringstream message;
-      message << "options.max_segment_length: " << options.max_segment_length << " m splits the path into about "
-              << pieces << " pieces by the last of " << options.max_attempts << " attempts, above the cap of "
-              << kMaxPlanPieces << " (a longer max_segment_length)";
-      return finish(PlanStatus::kInvalidInput, message.str());
-    }
-  }
-  bool safe = false;
-  for (int attempt = 0; attempt < options.max_attempts && !safe; ++attempt) {
-    const double factor = std::pow(options.retry_collision_weight_factor, attempt);
-    SpatialOptimizerOptions attempt_options = spatial;
-    attempt_options.collision_weight = std::min(kMaxSpatialWeight, spatial.collision_weight * factor);
-    const Waypoints joints = SplitSegments(path.waypoints, options.max_segment_length / std::pow(2.0, attempt));
-    hold_start(joints, &attempt_options);
-    t = Clock::now();
-    result.spatial = OptimizeSpatialCurve(*esdf_, joints, attempt_options);
-    result.times.spatial_ms += MillisecondsSince(t);
-    result.spatial_attempts = attempt + 1;
-    report("spatial", MillisecondsSince(t),
-           "attempt " + std::to_string(attempt + 1) + ", " + std::to_string(joints.cols() - 1) + " pieces, " +
-               std::to_string(result.spatial.iterations.size()) + " iterations, " + ToString(result.spatial.status));
-    if (!result.spatial.is_usable()) {
-      return finish(PlanStatus::kSpatialFailure, std::string("spatial optimization: ") +
-                                                     ToString(result.spatial.status) + ": " + result.spatial.message);
-    }
-    result.curve = result.spatial.curve;
-    // A piece longer than twice the field's diagonal has run away (it cannot stay in the field),
-    // and its dense check would need a sample count without bound.
-    const Eigen::AlignedBox3d field = esdf_->box().Metric(esdf_->resolution());
-    const double reach = 2.0 * field.diagonal().norm() + 1.0;
-    for (int i = 0; i < result.curve.num_pieces(); ++i) {
-      const double length = PolylineLength(result.curve.piece(i));
-      if (!(length <= reach)) {
-        std::ostringstream s;
-        s << "the optimized curve ran away: piece " << i << " is " << length
-          << " m long, more than twice the distance field's diagonal (" << field.diagonal().norm() << " m)";
-        return finish(PlanStatus::kSpatialFailure, s.str());
-      }
-    }
-    t = Clock::now();
-    result.min_clearance = MinVoxelClearance(*esdf_, result.curve, options.clearance_check_step, exact_below);
-    safe = result.min_clearance >= required;
-    if (!safe && result.min_clearance >= options.robot_radius) {
-      // Above the radius at the samples but within half a step of it: a check 8 times denser
-      // needs only 1/8 of the half-step margin (the curve may be fine in a tight gap).
-      const double fine_step = options.clearance_check_step / 8.0;
-      result.min_clearance = MinVoxelClearance(*esdf_, result.curve, fine_step, exact_below);
-      safe = result.min_clearance >=
-             std::max(options.robot_radius, std::min(required, options.robot_radius + 0.5 * fine_step));
-    }
-    result.times.check_ms += MillisecondsSince(t);
-    std::ostringstream outcome;
-    outcome << "clearance " << result.min_clearance << " m (required " << required << " m)";
-    report("check", MillisecondsSince(t), outcome.str());
-  }
-  result.path_length = result.curve.ArcLength(1e-6);
-  if (!safe) {
-    std::ostringstream s;
-    s << "the optimized curve comes within " << result.min_clearance << " m of an obstacle (required: " << required
-      << " m) after " << result.spatial_attempts << " attempts";
-    return finish(PlanStatus::kCollision, s.str());
-  }
+  std::string message;
+  const PlanStatus spatial = SpatialStage(*esdf_, start, goal, path.waypoints, held, options, &result, &message);
+  if (spatial != PlanStatus::kSuccess) return finish(spatial, message);
 
   // ---- temporal stage ----
   TemporalProblem problem;
@@ -426,9 +481,9 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   problem.cells_per_piece = options.temporal_cells_per_piece;
   problem.rho = options.rho;
   problem.constraint_mode = options.constraint_mode;
-  problem.boundary.start_velocity = start_velocity;
-  problem.boundary.start_acceleration = start_acceleration;
-  problem.relax_boundary = moving;
+  problem.boundary.start_velocity = held.velocity;
+  problem.boundary.start_acceleration = held.acceleration;
+  problem.relax_boundary = held.moving;
   t = Clock::now();
   // One solver per planner, kept while its options stay the same, so that a re-plan reuses its
   // workspace (the conic solver's symbolic analysis when the sparsity pattern repeats). Every field
@@ -448,20 +503,11 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
     outcome << ToString(result.temporal.status) << ", " << result.temporal.method << ", T "
             << result.temporal.total_time << " s";
     if (result.temporal.scp_iterations > 0) outcome << ", " << result.temporal.scp_iterations << " convex solves";
-    report("temporal", result.times.temporal_ms, outcome.str());
+    Report(options, "temporal", result.times.temporal_ms, outcome.str());
   }
   if (result.temporal.status == TemporalStatus::kOptimal) CurveQuality(&result);
-  switch (result.temporal.status) {
-    case TemporalStatus::kOptimal:
-      return finish(PlanStatus::kSuccess, "");
-    case TemporalStatus::kInfeasible:
-      return finish(PlanStatus::kTemporalInfeasible, "temporal stage: " + result.temporal.message);
-    case TemporalStatus::kInvalidInput:
-      return finish(PlanStatus::kInvalidInput, "temporal stage: " + result.temporal.message);
-    default:
-      return finish(PlanStatus::kTemporalFailure, std::string("temporal stage: ") + ToString(result.temporal.status) +
-                                                      ": " + result.temporal.message);
-  }
+  const PlanStatus temporal = FromTemporal(result.temporal, &message);
+  return finish(temporal, message);
 }
 
 PlanResult Plan(const Esdf& esdf, const Eigen::Vector3d& start, const Eigen::Vector3d& goal,

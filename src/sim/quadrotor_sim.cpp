@@ -90,6 +90,203 @@ FeasibilityReport QuadrotorSim::Fly(const Trajectory& reference, const VehicleLi
                  start_acceleration);
 }
 
+namespace {
+
+// The controller steps of a flight of `flight` seconds at time_step dt, refused above the caps.
+int FlightSteps(double flight, double dt, bool record_states) {
+  // 1e-6 relative slack: a flight a solver tolerance above a whole number of steps (T = 7 + 5e-9 s)
+  // adds no step; at most 1e-6 of the flight (in the settle time) goes unsimulated.
+  const double exact_steps = flight / dt * (1.0 - 1e-6);
+  if (exact_steps > kMaxSteps || (record_states && exact_steps > kMaxRecordedSteps)) {
+    std::ostringstream m;
+    m << "QuadrotorSim::Run: the flight (" << flight << " s at time_step " << dt << " s) would take more than "
+      << (exact_steps > kMaxSteps ? "1e8 steps" : "1e7 recorded steps (record_states)");
+    throw std::invalid_argument(m.str());
+  }
+  return static_cast<int>(std::ceil(exact_steps));
+}
+
+// The reference at t; after its end it flies on at its final velocity.
+class ExtendedReference {
+ public:
+  ExtendedReference(const QuadrotorSim::Reference& reference, double duration)
+      : reference_(reference), duration_(duration), last_(reference(duration)) {}
+
+  TrajectoryState operator()(double t) const {
+    TrajectoryState r;
+    if (t <= duration_) {
+      r = reference_(t);
+    } else {
+      r = last_;
+      r.t = t;
+      r.position = last_.position + (t - duration_) * last_.velocity;
+      r.acceleration.setZero();
+      r.jerk.setZero();
+    }
+    if (!r.position.allFinite() || !r.velocity.allFinite() || !r.acceleration.allFinite() || !r.jerk.allFinite()) {
+      std::ostringstream m;
+      m << "QuadrotorSim::Run: the reference is not finite at t = " << t << " s";
+      throw std::invalid_argument(m.str());
+    }
+    return r;
+  }
+
+ private:
+  const QuadrotorSim::Reference& reference_;
+  double duration_;
+  TrajectoryState last_;
+};
+
+// The extremes of a flight, folded in one controller step at a time: each axis' velocity and
+// acceleration ratios, with where and on which axis the largest is reached, and the quadrotor's
+// speed, acceleration norm, thrust and tilt.
+class FlightExtremes {
+ public:
+  FlightExtremes(const VehicleLimits& limits, FeasibilityReport* report)
+      : limits_(limits), report_(*report), quadrotor_(limits.HasNormLimits()), up_(0.0, 0.0, limits.gravity) {}
+
+  bool quadrotor() const { return quadrotor_; }
+  int velocity_axis() const { return velocity_axis_; }
+  int acceleration_axis() const { return acceleration_axis_; }
+
+  // The step from (v, a) at time t with the jerk u held for dt.
+  void NoteStep(double t, const Eigen::Vector3d& v, const Eigen::Vector3d& a, const Eigen::Vector3d& u, double dt) {
+    for (int i = 0; i < 3; ++i) {
+      double at = 0.0;
+      NoteVelocity(MaxAbsVelocity(v[i], a[i], u[i], dt, &at) / limits_.max_velocity[i], t + at, i);
+      // a is linear over the step: its largest magnitude is at an end.
+      const double a1 = a[i] + u[i] * dt;
+      NoteAcceleration(std::max(std::abs(a[i]), std::abs(a1)) / limits_.max_acceleration[i],
+                       std::abs(a1) > std::abs(a[i]) ? t + dt : t, i);
+    }
+    NoteQuadrotor(v, a, u, dt);
+  }
+
+  // The final state (v, a) at time t.
+  void NoteFinal(double t, const Eigen::Vector3d& v, const Eigen::Vector3d& a) {
+    for (int i = 0; i < 3; ++i) {
+      NoteVelocity(std::abs(v[i]) / limits_.max_velocity[i], t, i);
+      NoteAcceleration(std::abs(a[i]) / limits_.max_acceleration[i], t, i);
+    }
+    NoteQuadrotor(v, a, Eigen::Vector3d::Zero(), 0.0);
+  }
+
+  // Writes the quadrotor's ratios into the report; returns the limits they exceed beyond `bound`
+  // ("" when none does).
+  std::string QuadrotorRatios(double bound) {
+    if (limits_.max_speed) report_.max_speed_ratio = speed_ / *limits_.max_speed;
+    if (limits_.max_acceleration_norm) report_.max_acceleration_norm_ratio = acc_norm_ / *limits_.max_acceleration_norm;
+    if (limits_.max_thrust) report_.max_thrust_ratio = thrust_max_ / *limits_.max_thrust;
+    if (limits_.min_thrust) {
+      report_.min_thrust_ratio =
+          thrust_min_ > 0.0 ? *limits_.min_thrust / thrust_min_ : std::numeric_limits<double>::infinity();
+    }
+    if (limits_.max_tilt) report_.max_tilt_ratio = tilt_ / *limits_.max_tilt;
+    std::string failed;
+    const auto check = [&](const std::optional<double>& ratio, const char* name) {
+      if (ratio && !(*ratio <= bound)) {
+        std::ostringstream m;
+        m.precision(10);
+        m << (failed.empty() ? "" : "; ") << name << " ratio reaches " << *ratio;
+        failed += m.str();
+      }
+    };
+    check(report_.max_speed_ratio, "max_speed");
+    check(report_.max_acceleration_norm_ratio, "max_acceleration_norm");
+    check(report_.max_thrust_ratio, "max_thrust");
+    check(report_.min_thrust_ratio, "min_thrust");
+    check(report_.max_tilt_ratio, "max_tilt");
+    return failed;
+  }
+
+ private:
+  // Folds a value of |v_i| / vmax_i or |a_i| / amax_i reached at time t into the report.
+  void NoteVelocity(double ratio, double t, int axis) {
+    if (ratio > report_.max_velocity_ratio) {
+      report_.max_velocity_ratio = ratio;
+      report_.max_velocity_time = t;
+      velocity_axis_ = axis;
+    }
+  }
+  void NoteAcceleration(double ratio, double t, int axis) {
+    if (ratio > report_.max_acceleration_ratio) {
+      report_.max_acceleration_ratio = ratio;
+      report_.max_acceleration_time = t;
+      acceleration_axis_ = axis;
+    }
+  }
+  // The quadrotor's limits over one step from (v0, a0) with jerk u0 held for h (h = 0: the point).
+  void NoteQuadrotor(const Eigen::Vector3d& v0, const Eigen::Vector3d& a0, const Eigen::Vector3d& u0, double h) {
+    if (!quadrotor_) return;
+    const Eigen::Vector3d a1 = a0 + u0 * h;
+    speed_ = std::max(
+        {speed_, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(), (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
+    acc_norm_ = std::max({acc_norm_, a0.norm(), a1.norm()});
+    const Eigen::Vector3d w0 = a0 + up_, w1 = a1 + up_;
+    thrust_max_ = std::max({thrust_max_, w0.norm(), w1.norm()});
+    const double uu = u0.squaredNorm();
+    const double tau = uu > 0.0 ? std::clamp(-w0.dot(u0) / uu, 0.0, h) : 0.0;
+    thrust_min_ = std::min({thrust_min_, (w0 + u0 * tau).norm(), w1.norm()});
+    tilt_ = std::max({tilt_, std::atan2(w0.head<2>().norm(), w0(2)), std::atan2(w1.head<2>().norm(), w1(2))});
+  }
+
+  const VehicleLimits& limits_;
+  FeasibilityReport& report_;
+  const bool quadrotor_;
+  const Eigen::Vector3d up_;
+  int velocity_axis_ = 0, acceleration_axis_ = 0;
+  double speed_ = 0.0, acc_norm_ = 0.0, thrust_max_ = 0.0, tilt_ = 0.0;
+  double thrust_min_ = std::numeric_limits<double>::infinity();
+};
+
+// The verdict of a flight whose extremes are in the report, and its message.
+void FinishReport(const QuadrotorSimOptions& options, FlightExtremes* extremes, bool diverged, int steps,
+                  FeasibilityReport* out) {
+  FeasibilityReport& report = *out;
+  report.tolerance = options.limit_tolerance;
+  const double bound = 1.0 + options.limit_tolerance;
+  const bool velocity_ok = report.max_velocity_ratio <= bound;
+  const bool acceleration_ok = report.max_acceleration_ratio <= bound;
+  std::string quadrotor_failed = extremes->QuadrotorRatios(bound);
+  const bool tracked = report.max_position_error <= options.max_position_error;
+  if (!tracked) {
+    std::ostringstream m;
+    m.precision(10);
+    m << (quadrotor_failed.empty() ? "" : "; ") << "the vehicle strays " << report.max_position_error
+      << " m from the reference at t = " << report.max_position_error_time << " s (max_position_error "
+      << options.max_position_error << " m)";
+    quadrotor_failed += m.str();
+  }
+  report.feasible = velocity_ok && acceleration_ok && quadrotor_failed.empty() && !diverged;
+  std::ostringstream message;
+  message.precision(10);
+  if (diverged) {
+    message << "the flight diverged (non-finite state) at t = " << report.max_velocity_time << " s";
+    if (report.clipped_steps > 0) message << " after " << report.clipped_steps << " steps clipped to the jerk limit";
+    report.max_velocity_ratio = report.max_acceleration_ratio = std::numeric_limits<double>::infinity();
+    report.message = message.str();
+    return;
+  }
+  if (report.feasible)
+    message << (extremes->quadrotor() ? "every limit holds" : "velocity and acceleration limits hold");
+  if (!quadrotor_failed.empty()) message << quadrotor_failed << (velocity_ok && acceleration_ok ? "" : "; ");
+  if (!velocity_ok) {
+    message << "|v_" << AxisName(extremes->velocity_axis()) << "| reaches " << report.max_velocity_ratio
+            << " x max_velocity at t = " << report.max_velocity_time << " s";
+  }
+  if (!acceleration_ok) {
+    message << (velocity_ok ? "" : "; ") << "|a_" << AxisName(extremes->acceleration_axis()) << "| reaches "
+            << report.max_acceleration_ratio << " x max_acceleration at t = " << report.max_acceleration_time << " s";
+  }
+  if (report.clipped_steps > 0) {
+    message << "; the jerk limit clipped the command in " << report.clipped_steps << " of " << steps << " steps (up to "
+            << report.max_jerk_ratio << " x)";
+  }
+  report.message = message.str();
+}
+
+}  // namespace
+
 FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double duration, const VehicleLimits& limits,
                                         const Eigen::Vector3d& start_velocity,
                                         const Eigen::Vector3d& start_acceleration) const {
@@ -107,40 +304,11 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
     throw std::invalid_argument("QuadrotorSim::Run: limits.max_acceleration must be positive");
   }
   const double dt = options_.time_step;
-  const double flight = duration + options_.settle_time;
-  // 1e-6 relative slack: a flight a solver tolerance above a whole number of steps (T = 7 + 5e-9 s)
-  // adds no step; at most 1e-6 of the flight (in the settle time) goes unsimulated.
-  const double exact_steps = flight / dt * (1.0 - 1e-6);
-  if (exact_steps > kMaxSteps || (options_.record_states && exact_steps > kMaxRecordedSteps)) {
-    std::ostringstream m;
-    m << "QuadrotorSim::Run: the flight (" << flight << " s at time_step " << dt << " s) would take more than "
-      << (exact_steps > kMaxSteps ? "1e8 steps" : "1e7 recorded steps (record_states)");
-    throw std::invalid_argument(m.str());
-  }
-  const int steps = static_cast<int>(std::ceil(exact_steps));
+  const int steps = FlightSteps(duration + options_.settle_time, dt, options_.record_states);
 
   const double w = options_.bandwidth;
   const double kp = w * w * w, kv = 3.0 * w * w, ka = 3.0 * w;
-  const TrajectoryState last = reference(duration);
-  // The reference at t; after its end it flies on at its final velocity.
-  const auto reference_at = [&](double t) {
-    TrajectoryState r;
-    if (t <= duration) {
-      r = reference(t);
-    } else {
-      r = last;
-      r.t = t;
-      r.position = last.position + (t - duration) * last.velocity;
-      r.acceleration.setZero();
-      r.jerk.setZero();
-    }
-    if (!r.position.allFinite() || !r.velocity.allFinite() || !r.acceleration.allFinite() || !r.jerk.allFinite()) {
-      std::ostringstream m;
-      m << "QuadrotorSim::Run: the reference is not finite at t = " << t << " s";
-      throw std::invalid_argument(m.str());
-    }
-    return r;
-  };
+  const ExtendedReference reference_at(reference, duration);
 
   Eigen::Vector3d p = reference_at(0.0).position + options_.initial_position_error;
   Eigen::Vector3d v = start_velocity + options_.initial_velocity_error;
@@ -148,41 +316,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
 
   FeasibilityReport report;
   report.steps = steps;
-  int velocity_axis = 0, acceleration_axis = 0;
-  // Folds a value of |v_i| / vmax_i or |a_i| / amax_i reached at time t into the report.
-  const auto note_velocity = [&](double ratio, double t, int axis) {
-    if (ratio > report.max_velocity_ratio) {
-      report.max_velocity_ratio = ratio;
-      report.max_velocity_time = t;
-      velocity_axis = axis;
-    }
-  };
-  const auto note_acceleration = [&](double ratio, double t, int axis) {
-    if (ratio > report.max_acceleration_ratio) {
-      report.max_acceleration_ratio = ratio;
-      report.max_acceleration_time = t;
-      acceleration_axis = axis;
-    }
-  };
-  // The quadrotor's limits over one step from (v, a) with jerk u held for h (h = 0: the point).
-  const bool quadrotor = limits.HasNormLimits();
-  const Eigen::Vector3d up(0.0, 0.0, limits.gravity);
-  double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, tilt = 0.0;
-  double thrust_min = std::numeric_limits<double>::infinity();
-  const auto note_quadrotor = [&](const Eigen::Vector3d& v0, const Eigen::Vector3d& a0, const Eigen::Vector3d& u0,
-                                  double h) {
-    if (!quadrotor) return;
-    const Eigen::Vector3d a1 = a0 + u0 * h;
-    speed = std::max(
-        {speed, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(), (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
-    acc_norm = std::max({acc_norm, a0.norm(), a1.norm()});
-    const Eigen::Vector3d w0 = a0 + up, w1 = a1 + up;
-    thrust_max = std::max({thrust_max, w0.norm(), w1.norm()});
-    const double uu = u0.squaredNorm();
-    const double tau = uu > 0.0 ? std::clamp(-w0.dot(u0) / uu, 0.0, h) : 0.0;
-    thrust_min = std::min({thrust_min, (w0 + u0 * tau).norm(), w1.norm()});
-    tilt = std::max({tilt, std::atan2(w0.head<2>().norm(), w0(2)), std::atan2(w1.head<2>().norm(), w1(2))});
-  };
+  FlightExtremes extremes(limits, &report);
   bool diverged = false;
   if (options_.record_states) report.states.reserve(static_cast<size_t>(steps) + 1);
   for (int k = 0; k <= steps; ++k) {
@@ -201,11 +335,7 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
     }
     if (k == steps) {  // the final state: measured (the only state when steps = 0) and recorded
       report.final_position_error = error;
-      for (int i = 0; i < 3; ++i) {
-        note_velocity(std::abs(v[i]) / limits.max_velocity[i], t, i);
-        note_acceleration(std::abs(a[i]) / limits.max_acceleration[i], t, i);
-      }
-      note_quadrotor(v, a, Eigen::Vector3d::Zero(), 0.0);
+      extremes.NoteFinal(t, v, a);
       if (options_.record_states) report.states.push_back({t, p, v, a, Eigen::Vector3d::Zero(), p - r.position});
       break;
     }
@@ -224,82 +354,13 @@ FeasibilityReport QuadrotorSim::RunFrom(const Reference& reference, double durat
     }
     report.max_jerk = std::max(report.max_jerk, u.cwiseAbs().maxCoeff());
     if (options_.record_states) report.states.push_back({t, p, v, a, u, p - r.position});
-
-    for (int i = 0; i < 3; ++i) {
-      double at = 0.0;
-      note_velocity(MaxAbsVelocity(v[i], a[i], u[i], dt, &at) / limits.max_velocity[i], t + at, i);
-      // a is linear over the step: its largest magnitude is at an end.
-      const double a1 = a[i] + u[i] * dt;
-      note_acceleration(std::max(std::abs(a[i]), std::abs(a1)) / limits.max_acceleration[i],
-                        std::abs(a1) > std::abs(a[i]) ? t + dt : t, i);
-    }
-    note_quadrotor(v, a, u, dt);
+    extremes.NoteStep(t, v, a, u, dt);
     // Exact integration of the triple integrator over the step with u held.
     p += dt * (v + dt * (0.5 * a + dt * u / 6.0));
     v += dt * (a + 0.5 * dt * u);
     a += dt * u;
   }
-
-  report.tolerance = options_.limit_tolerance;
-  const double bound = 1.0 + options_.limit_tolerance;
-  const bool velocity_ok = report.max_velocity_ratio <= bound;
-  const bool acceleration_ok = report.max_acceleration_ratio <= bound;
-  if (limits.max_speed) report.max_speed_ratio = speed / *limits.max_speed;
-  if (limits.max_acceleration_norm) report.max_acceleration_norm_ratio = acc_norm / *limits.max_acceleration_norm;
-  if (limits.max_thrust) report.max_thrust_ratio = thrust_max / *limits.max_thrust;
-  if (limits.min_thrust) {
-    report.min_thrust_ratio =
-        thrust_min > 0.0 ? *limits.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
-  }
-  if (limits.max_tilt) report.max_tilt_ratio = tilt / *limits.max_tilt;
-  std::string quadrotor_failed;
-  const auto check_quadrotor = [&](const std::optional<double>& ratio, const char* name) {
-    if (ratio && !(*ratio <= bound)) {
-      std::ostringstream m;
-      m.precision(10);
-      m << (quadrotor_failed.empty() ? "" : "; ") << name << " ratio reaches " << *ratio;
-      quadrotor_failed += m.str();
-    }
-  };
-  check_quadrotor(report.max_speed_ratio, "max_speed");
-  check_quadrotor(report.max_acceleration_norm_ratio, "max_acceleration_norm");
-  check_quadrotor(report.max_thrust_ratio, "max_thrust");
-  check_quadrotor(report.min_thrust_ratio, "min_thrust");
-  check_quadrotor(report.max_tilt_ratio, "max_tilt");
-  const bool tracked = report.max_position_error <= options_.max_position_error;
-  if (!tracked) {
-    std::ostringstream m;
-    m.precision(10);
-    m << (quadrotor_failed.empty() ? "" : "; ") << "the vehicle strays " << report.max_position_error
-      << " m from the reference at t = " << report.max_position_error_time << " s (max_position_error "
-      << options_.max_position_error << " m)";
-    quadrotor_failed += m.str();
-  }
-  report.feasible = velocity_ok && acceleration_ok && quadrotor_failed.empty() && !diverged;
-  std::ostringstream message;
-  message.precision(10);
-  if (diverged) {
-    message << "the flight diverged (non-finite state) at t = " << report.max_velocity_time << " s";
-    if (report.clipped_steps > 0) message << " after " << report.clipped_steps << " steps clipped to the jerk limit";
-    report.max_velocity_ratio = report.max_acceleration_ratio = std::numeric_limits<double>::infinity();
-    report.message = message.str();
-    return report;
-  }
-  if (report.feasible) message << (quadrotor ? "every limit holds" : "velocity and acceleration limits hold");
-  if (!quadrotor_failed.empty()) message << quadrotor_failed << (velocity_ok && acceleration_ok ? "" : "; ");
-  if (!velocity_ok) {
-    message << "|v_" << AxisName(velocity_axis) << "| reaches " << report.max_velocity_ratio
-            << " x max_velocity at t = " << report.max_velocity_time << " s";
-  }
-  if (!acceleration_ok) {
-    message << (velocity_ok ? "" : "; ") << "|a_" << AxisName(acceleration_axis) << "| reaches "
-            << report.max_acceleration_ratio << " x max_acceleration at t = " << report.max_acceleration_time << " s";
-  }
-  if (report.clipped_steps > 0) {
-    message << "; the jerk limit clipped the command in " << report.clipped_steps << " of " << steps << " steps (up to "
-            << report.max_jerk_ratio << " x)";
-  }
-  report.message = message.str();
+  FinishReport(options_, &extremes, diverged, steps, &report);
   return report;
 }
 

@@ -398,6 +398,170 @@ bool AddRegularAxisTemplates(JerkContext& c, int g0, double ds, int a, const Sma
   return true;
 }
 
+// The polynomials of one axis on a regular cell of length ds (in u), per half-grid value of the
+// cell: the squared velocity f'^2 b, the acceleration f' b' / 2 + f'' b and the jerk's
+// P = f' a' + 3 f'' a + f''' b (a rest cell's are in RestPolys, in w).
+void AxisPolys(const SmallPoly& q, const SmallPoly& p2, const SmallPoly& p3, double ds, SmallPoly (&vel)[3],
+               SmallPoly (&acc)[3], SmallPoly (&jerk)[3]) {
+  const SmallPoly q2 = Multiply(q, q);
+  for (int j = 0; j < 3; ++j) {
+    vel[j] = Multiply(q2, Basis(j));
+    acc[j] = Padded(Multiply(q, BasisDerivative(j)) / (2.0 * ds), 0);
+    const SmallPoly curvature = Multiply(p2, Basis(j));
+    const int size = static_cast<int>(std::max(acc[j].size(), curvature.size()));
+    acc[j] = Padded(acc[j], size) + Padded(curvature, size);
+    const SmallPoly j1 = q * (kBasisSecond[j] / (2.0 * ds * ds));
+    const SmallPoly j2 = Multiply(p2, BasisDerivative(j)) * (3.0 / (2.0 * ds));
+    const SmallPoly j3 = Multiply(p3, Basis(j));
+    const int js = static_cast<int>(std::max({j1.size(), j2.size(), j3.size()}));
+    jerk[j] = Padded(j1, js) + Padded(j2, js) + Padded(j3, js);
+  }
+}
+
+// The rows sign * polys <= bound (both signs when two_sided) on the Bernstein coefficients of a
+// cell whose first half-grid value is g0, every row of one kind in a common degree; as templates
+// when the context collects them (DiscretizeJerkLimitedTemplates).
+void EmitLimitRows(JerkContext& c, int piece, int k, int axis, int g0, const SmallPoly (&polys)[3], bool two_sided,
+                   double bound, LinearRow::Kind kind) {
+  int size = 0;
+  for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
+  size = std::max(size, 3);
+  SmallPoly bern[3];
+  for (int j = 0; j < 3; ++j) bern[j] = c.bernstein.Convert(Padded(polys[j], size));
+  for (const double sign : {1.0, -1.0}) {
+    if (sign < 0.0 && !two_sided) break;
+    for (int i = 0; i < size; ++i) {
+      const double w[3] = {sign * bern[0](i), sign * bern[1](i), sign * bern[2](i)};
+      if (w[0] <= 0.0 && w[1] <= 0.0 && w[2] <= 0.0) continue;  // holds for b >= 0
+      if (c.templates != nullptr) {
+        // Over the cell's grid values, for the structured path (DiscretizeJerkLimitedTemplates).
+        internal::GridRow row;
+        row.g0 = g0;
+        row.kind = kind;
+        for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = w[j] / bound;
+        c.templates->cell_rows.push_back(row);
+        continue;
+      }
+      for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, w[j] / bound);
+      c.row.Finish(kind, -kInf, 1.0, [&] {
+        return std::string("a limit on axis ") + kAxisNames[axis] + " in piece " + std::to_string(piece) + " cell " +
+               std::to_string(k);
+      });
+    }
+  }
+}
+
+// The jerk rows of one axis as templates for the structured path, which linearizes them when it
+// solves: a regular cell's in Bernstein form over the whole cell (the basis depends on the size
+// alone: converted once per size), a rest cell's per part of kRestJerkParts.
+void AddJerkTemplates(JerkContext& c, int piece, int k, int g0, const SmallPoly (&jerk)[3],
+                      const SmallPoly (&root_basis)[3], double jmax, const RestPolys* rest) {
+  int size = 0;
+  for (int j = 0; j < 3; ++j) {
+    size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
+  }
+  SmallPoly bern_jerk[3], rest_bernstein[3];
+  if (rest == nullptr) {
+    for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
+  }
+  if (rest == nullptr && c.basis_size != size) {
+    for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
+    c.basis_size = size;
+  }
+  const SmallPoly(&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
+  const int parts = rest != nullptr ? kRestJerkParts : 1;
+  for (int part = 0; part < parts; ++part) {
+    const double w0 = static_cast<double>(part) / parts, w1 = (part + 1.0) / parts;
+    if (rest != nullptr) {
+      for (int j = 0; j < 3; ++j) {
+        bern_jerk[j] = c.bernstein.Convert(Shifted(Padded(jerk[j], size), w0, w1 - w0));
+        rest_bernstein[j] = c.bernstein.Convert(Shifted(Padded(root_basis[j], size), w0, w1 - w0));
+      }
+    }
+    for (const double sign : {1.0, -1.0}) {
+      for (int i = 0; i < size; ++i) {
+        internal::JerkRowTemplate t;
+        t.g0 = g0;
+        if (rest != nullptr) {
+          t.rest_far = static_cast<std::int8_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
+          t.part = static_cast<std::int8_t>(part);
+          t.parts = static_cast<std::int8_t>(parts);
+        }
+        for (int j = 0; j < 3; ++j) {
+          t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i) / jmax;
+          t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
+        }
+        c.templates->jerk_rows.push_back(t);
+      }
+    }
+  }
+}
+
+// The jerk rows of one axis on kJerkSegments equal parts of the cell (a rest cell: kRestJerkParts),
+// each linearized at the previous solution's (lin) largest b on that part. One part: on the
+// S-curve line (v 4, a 3, j 10) four parts gave the same T to 6 digits at K = 20..200, took 2-3 x
+// longer and ended some solves at reduced accuracy.
+void AddLinearizedJerkRows(JerkContext& c, int piece, int k, int axis, int g0, const SmallPoly (&jerk)[3],
+                           const SmallPoly (&root_basis)[3], double jmax, const std::vector<double>& lin,
+                           const RestPolys* rest) {
+  const double lb[3] = {lin[static_cast<size_t>(g0)], lin[static_cast<size_t>(g0 + 1)],
+                        lin[static_cast<size_t>(g0 + 2)]};
+  const auto previous_b = [&](double u) {
+    return lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1);
+  };
+  // The rows sign * P + kappa * basis <= bound on the part's Bernstein coefficients.
+  SmallPoly part_basis[3];
+  const auto emit_part = [&](SmallPoly(&polys)[3], double sign, double kappa, double bound) {
+    int size = 0;
+    for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
+    SmallPoly bern[3];
+    for (int j = 0; j < 3; ++j) {
+      bern[j] = c.bernstein.Convert(sign * Padded(polys[j], size) + kappa * Padded(part_basis[j], size));
+    }
+    for (int i = 0; i < size; ++i) {
+      if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;
+      for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / bound);
+      c.row.Finish(LinearRow::Kind::kJerk, -kInf, 1.0, [&] {
+        return std::string("jerk on axis ") + kAxisNames[axis] + " in piece " + std::to_string(piece) + " cell " +
+               std::to_string(k);
+      });
+    }
+  };
+  const int parts = rest != nullptr ? kRestJerkParts : kJerkSegments;
+  for (int part = 0; part < parts; ++part) {
+    const double u0 = static_cast<double>(part) / parts, u1 = (part + 1.0) / parts;
+    double b = std::max(previous_b(u0), previous_b(u1));
+    if (rest != nullptr) {
+      // A rest cell's q is linear: its largest value on the part is at an end of it.
+      const double alpha = lb[kRestAlpha], far = lb[RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)])];
+      b = std::max(alpha + (far - alpha) * u0, alpha + (far - alpha) * u1);
+    }
+    // The quadratic's vertex inside the part.
+    const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
+    if (c2 < 0.0 && rest == nullptr) {
+      const double vertex = -c1 / (2.0 * c2);
+      if (vertex > u0 && vertex < u1) b = std::max(b, previous_b(vertex));
+    }
+    // Never linearize at b near 0: the tangent would be nearly vertical and its row badly
+    // scaled (a floor of 1e-12 made the conic solver stall). Any b > 0 keeps the row
+    // conservative; below bbar_floor the rows only loosen.
+    b = std::max(b, c.bbar_floor);
+    static_assert(kJerkSegments == 1, "LinearizationPoint is the one-part rule");
+    const double kappa = jmax / (2.0 * b * std::sqrt(b));
+    const double bound = 3.0 * jmax / (2.0 * std::sqrt(b));
+    SmallPoly part_jerk[3];
+    for (int j = 0; j < 3; ++j) {
+      part_jerk[j] = Shifted(jerk[j], u0, u1 - u0);
+      const SmallPoly basis = Shifted(root_basis[j], u0, u1 - u0);
+      const int size = static_cast<int>(std::max(part_jerk[j].size(), basis.size()));
+      part_basis[j] = Padded(basis, size);
+      part_jerk[j] = Padded(part_jerk[j], size);
+    }
+    emit_part(part_jerk, 1.0, kappa, bound);
+    emit_part(part_jerk, -1.0, kappa, bound);
+  }
+}
+
 }  // namespace
 
 // The velocity, acceleration and jerk rows of a regular cell (b quadratic in u through its three
@@ -440,173 +604,29 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     const double vmax2 = limits.max_velocity(a) * limits.max_velocity(a);
     const double amax = limits.max_acceleration(a), jmax = (*limits.max_jerk)(a);
     SmallPoly vel[3], acc[3], jerk[3];
-    const SmallPoly q2 = Multiply(q, q);
-    for (int j = 0; j < 3 && rest != nullptr; ++j) {
-      vel[j] = rest->vel[a][j];
-      acc[j] = rest->acc[a][j];
-      jerk[j] = rest->jerk[a][j];
-      if (quadrotor) {
-        const int size = static_cast<int>(std::max(speed[j].size(), vel[j].size()));
-        speed[j] = Padded(speed[j], size) + Padded(vel[j], size);
-        acceleration[a][j] = acc[j];
-      }
-    }
-    for (int j = 0; j < 3 && rest == nullptr; ++j) {
-      vel[j] = Multiply(q2, Basis(j));
-      acc[j] = Padded(Multiply(q, BasisDerivative(j)) / (2.0 * ds), 0);
-      const SmallPoly curvature = Multiply(p2, Basis(j));
-      const int size = static_cast<int>(std::max(acc[j].size(), curvature.size()));
-      acc[j] = Padded(acc[j], size) + Padded(curvature, size);
-      const SmallPoly j1 = q * (kBasisSecond[j] / (2.0 * ds * ds));
-      const SmallPoly j2 = Multiply(p2, BasisDerivative(j)) * (3.0 / (2.0 * ds));
-      const SmallPoly j3 = Multiply(p3, Basis(j));
-      const int js = static_cast<int>(std::max({j1.size(), j2.size(), j3.size()}));
-      jerk[j] = Padded(j1, js) + Padded(j2, js) + Padded(j3, js);
-      if (quadrotor) {
-        const int size = static_cast<int>(std::max(speed[j].size(), vel[j].size()));
-        speed[j] = Padded(speed[j], size) + Padded(vel[j], size);
-        acceleration[a][j] = acc[j];
-      }
-    }
-    // Every row of one kind in a common degree, converted to Bernstein form per grid value.
-    // The rows sign * polys <= bound (both signs when two_sided) on the cell's Bernstein
-    // coefficients, converted once.
-    const auto emit = [&](SmallPoly(&polys)[3], bool two_sided, double bound, LinearRow::Kind kind) {
-      int size = 0;
-      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
-      size = std::max(size, 3);
-      SmallPoly bern[3];
-      for (int j = 0; j < 3; ++j) bern[j] = c.bernstein.Convert(Padded(polys[j], size));
-      for (const double sign : {1.0, -1.0}) {
-        if (sign < 0.0 && !two_sided) break;
-        for (int i = 0; i < size; ++i) {
-          const double w[3] = {sign * bern[0](i), sign * bern[1](i), sign * bern[2](i)};
-          if (w[0] <= 0.0 && w[1] <= 0.0 && w[2] <= 0.0) continue;  // holds for b >= 0
-          if (c.templates != nullptr) {
-            // Over the cell's grid values, for the structured path (DiscretizeJerkLimitedTemplates).
-            internal::GridRow row;
-            row.g0 = g0;
-            row.kind = kind;
-            for (int j = 0; j < 3; ++j) row.coef[static_cast<size_t>(j)] = w[j] / bound;
-            c.templates->cell_rows.push_back(row);
-            continue;
-          }
-          for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, w[j] / bound);
-          c.row.Finish(kind, -kInf, 1.0, [&] {
-            return std::string("a limit on axis ") + kAxisNames[a] + " in piece " + std::to_string(piece) + " cell " +
-                   std::to_string(k);
-          });
-        }
-      }
-    };
-    SmallPoly part_basis[3];
-    const auto emit_part = [&](SmallPoly(&polys)[3], double sign, double kappa, double bound) {
-      int size = 0;
-      for (int j = 0; j < 3; ++j) size = std::max<int>(size, static_cast<int>(polys[j].size()));
-      SmallPoly bern[3];
+    if (rest != nullptr) {
       for (int j = 0; j < 3; ++j) {
-        bern[j] = c.bernstein.Convert(sign * Padded(polys[j], size) + kappa * Padded(part_basis[j], size));
+        vel[j] = rest->vel[a][j];
+        acc[j] = rest->acc[a][j];
+        jerk[j] = rest->jerk[a][j];
       }
-      for (int i = 0; i < size; ++i) {
-        if (bern[0](i) <= 0.0 && bern[1](i) <= 0.0 && bern[2](i) <= 0.0) continue;
-        for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, bern[j](i) / bound);
-        c.row.Finish(LinearRow::Kind::kJerk, -kInf, 1.0, [&] {
-          return std::string("jerk on axis ") + kAxisNames[a] + " in piece " + std::to_string(piece) + " cell " +
-                 std::to_string(k);
-        });
-      }
-    };
-    if (std::isfinite(vmax2)) emit(vel, false, vmax2, LinearRow::Kind::kVelocity);
-    if (std::isfinite(amax)) {
-      emit(acc, true, amax, LinearRow::Kind::kAcceleration);
+    } else {
+      AxisPolys(q, p2, p3, ds, vel, acc, jerk);
     }
+    if (quadrotor) {
+      for (int j = 0; j < 3; ++j) {
+        const int size = static_cast<int>(std::max(speed[j].size(), vel[j].size()));
+        speed[j] = Padded(speed[j], size) + Padded(vel[j], size);
+        acceleration[a][j] = acc[j];
+      }
+    }
+    if (std::isfinite(vmax2)) EmitLimitRows(c, piece, k, a, g0, vel, false, vmax2, LinearRow::Kind::kVelocity);
+    if (std::isfinite(amax)) EmitLimitRows(c, piece, k, a, g0, acc, true, amax, LinearRow::Kind::kAcceleration);
     if (mode == JerkRows::kExact) AddExactJerkRows(c, piece, k, jerk, root_basis, jmax);
     if (mode == JerkRows::kNone && c.templates != nullptr) {
-      int size = 0;
-      for (int j = 0; j < 3; ++j)
-        size = std::max<int>(size, static_cast<int>(std::max(jerk[j].size(), root_basis[j].size())));
-      // A regular cell's rows in Bernstein form over the whole cell (the basis depends on the size
-      // alone: converted once per size); a rest cell's per part, below.
-      SmallPoly bern_jerk[3], rest_bernstein[3];
-      if (rest == nullptr) {
-        for (int j = 0; j < 3; ++j) bern_jerk[j] = c.bernstein.Convert(Padded(jerk[j], size));
-      }
-      if (rest == nullptr && c.basis_size != size) {
-        for (int j = 0; j < 3; ++j) c.basis_bernstein[j] = c.bernstein.Convert(Padded(Basis(j), size));
-        c.basis_size = size;
-      }
-      const SmallPoly(&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
-      const int parts = rest != nullptr ? kRestJerkParts : 1;
-      for (int part = 0; part < parts; ++part) {
-        const double w0 = static_cast<double>(part) / parts, w1 = (part + 1.0) / parts;
-        if (rest != nullptr) {
-          for (int j = 0; j < 3; ++j) {
-            bern_jerk[j] = c.bernstein.Convert(Shifted(Padded(jerk[j], size), w0, w1 - w0));
-            rest_bernstein[j] = c.bernstein.Convert(Shifted(Padded(root_basis[j], size), w0, w1 - w0));
-          }
-        }
-        for (const double sign : {1.0, -1.0}) {
-          for (int i = 0; i < size; ++i) {
-            internal::JerkRowTemplate t;
-            t.g0 = g0;
-            if (rest != nullptr) {
-              t.rest_far = static_cast<std::int8_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
-              t.part = static_cast<std::int8_t>(part);
-              t.parts = static_cast<std::int8_t>(parts);
-            }
-            for (int j = 0; j < 3; ++j) {
-              t.a[static_cast<size_t>(j)] = sign * bern_jerk[j](i) / jmax;
-              t.basis[static_cast<size_t>(j)] = bern_basis[j](i);
-            }
-            c.templates->jerk_rows.push_back(t);
-          }
-        }
-      }
+      AddJerkTemplates(c, piece, k, g0, jerk, root_basis, jmax, rest);
     }
-    if (mode == JerkRows::kLinearized) {
-      // The jerk rows on kJerkSegments equal parts of the cell, each linearized at the previous
-      // solution's largest b on that part. One part: on the S-curve line (v 4, a 3, j 10) four
-      // parts gave the same T to 6 digits at K = 20..200, took 2-3 x longer and ended some
-      // solves at reduced accuracy.
-      const double lb[3] = {(*lin)[static_cast<size_t>(g0)], (*lin)[static_cast<size_t>(g0 + 1)],
-                            (*lin)[static_cast<size_t>(g0 + 2)]};
-      const auto previous_b = [&](double u) {
-        return lb[0] * (1 - u) * (1 - 2 * u) + lb[1] * 4 * u * (1 - u) + lb[2] * u * (2 * u - 1);
-      };
-      const int parts = rest != nullptr ? kRestJerkParts : kJerkSegments;
-      for (int part = 0; part < parts; ++part) {
-        const double u0 = static_cast<double>(part) / parts, u1 = (part + 1.0) / parts;
-        double b = std::max(previous_b(u0), previous_b(u1));
-        if (rest != nullptr) {
-          // A rest cell's q is linear: its largest value on the part is at an end of it.
-          const double alpha = lb[kRestAlpha], far = lb[RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)])];
-          b = std::max(alpha + (far - alpha) * u0, alpha + (far - alpha) * u1);
-        }
-        // The quadratic's vertex inside the part.
-        const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
-        if (c2 < 0.0 && rest == nullptr) {
-          const double vertex = -c1 / (2.0 * c2);
-          if (vertex > u0 && vertex < u1) b = std::max(b, previous_b(vertex));
-        }
-        // Never linearize at b near 0: the tangent would be nearly vertical and its row badly
-        // scaled (a floor of 1e-12 made the conic solver stall). Any b > 0 keeps the row
-        // conservative; below bbar_floor the rows only loosen.
-        b = std::max(b, c.bbar_floor);
-        static_assert(kJerkSegments == 1, "LinearizationPoint is the one-part rule");
-        const double kappa = jmax / (2.0 * b * std::sqrt(b));
-        const double bound = 3.0 * jmax / (2.0 * std::sqrt(b));
-        SmallPoly part_jerk[3];
-        for (int j = 0; j < 3; ++j) {
-          part_jerk[j] = Shifted(jerk[j], u0, u1 - u0);
-          const SmallPoly basis = Shifted(root_basis[j], u0, u1 - u0);
-          const int size = static_cast<int>(std::max(part_jerk[j].size(), basis.size()));
-          part_basis[j] = Padded(basis, size);
-          part_jerk[j] = Padded(part_jerk[j], size);
-        }
-        emit_part(part_jerk, 1.0, kappa, bound);
-        emit_part(part_jerk, -1.0, kappa, bound);
-      }
-    }
+    if (mode == JerkRows::kLinearized) AddLinearizedJerkRows(c, piece, k, a, g0, jerk, root_basis, jmax, *lin, rest);
   }
   if (quadrotor) AddQuadrotorCellRows(c, piece, k, speed, acceleration);
 }
