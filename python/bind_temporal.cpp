@@ -71,10 +71,8 @@ TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& s
   return s->Solve(problem);
 }
 
-}  // namespace
-
-void BindTemporal(py::module_& m) {
-  // ---- limits ----
+// Limits.
+void BindLimits(py::module_& m) {
   py::class_<VehicleLimits>(
       m, "Limits",
       "Vehicle limits: per-axis max_velocity and max_acceleration (m/s, m/s^2; +inf for none), "
@@ -132,8 +130,10 @@ void BindTemporal(py::module_& m) {
         s << ")";
         return s.str();
       });
+}
 
-  // ---- curves ----
+// Curve.
+void BindCurve(py::module_& m) {
   py::class_<PiecewiseCurve>(m, "Curve", "A piecewise polynomial curve f(s), each piece on its own s in [0, 1].")
       .def(py::init([](const py::list& pieces) {
              std::vector<PolynomialPiece> out;
@@ -202,8 +202,10 @@ void BindTemporal(py::module_& m) {
       .def(
           "to_json", [](const PiecewiseCurve& c) { return CurveToJson(c); }, "The curve JSON of docs/formats.md.")
       .def(py::pickle(&pickle_state::CurveState, &pickle_state::CurveFromState));
+}
 
-  // ---- temporal problem ----
+// TemporalProblem, load_problem and parse_problem.
+void BindProblem(py::module_& m) {
   py::class_<TemporalProblem>(
       m, "TemporalProblem",
       "The temporal problem (docs/temporal.md): a curve, limits, boundary velocities and accelerations, "
@@ -261,8 +263,10 @@ void BindTemporal(py::module_& m) {
   m.def(
       "parse_problem", [](const std::string& text) { return ParseTemporalProblemJson(text); }, py::arg("json_text"),
       "Parses problem JSON text.");
+}
 
-  // ---- temporal result ----
+// TemporalProfile and TemporalResult.
+void BindResults(py::module_& m) {
   py::class_<TemporalProfile>(m, "TemporalProfile", "s(t) along the curve: b = sdot^2 on the grid.")
       .def_property_readonly("total_time", &TemporalProfile::total_time)
       .def_property_readonly("num_pieces", &TemporalProfile::num_pieces)
@@ -341,7 +345,10 @@ void BindTemporal(py::module_& m) {
         s << "<TemporalResult " << ToString(r.status) << " T=" << r.total_time << " s (" << r.solver << ")>";
         return s.str();
       });
+}
 
+// solve, time_solves and the shared Solver.
+void BindSolve(py::module_& m) {
   m.def("solve", &SolveProblem, py::arg("problem"), py::arg("solver") = "socp", py::arg("max_memory_mb") = 0.0,
         "Solves a TemporalProblem with 'socp' (our conic solver) or 'ipopt'. max_memory_mb > 0: a problem whose "
         "estimated peak is above it raises ValueError before it is solved. The GIL is released while it runs.");
@@ -396,6 +403,17 @@ void BindTemporal(py::module_& m) {
           py::arg("problem"),
           "Solves, releasing the GIL; concurrent calls on one Solver run one after the other. ValueError before "
           "solving a problem above the Solver's max_memory_mb.");
+}
+
+}  // namespace
+
+void BindTemporal(py::module_& m) {
+  // In this order: each part names the types of the parts before it in its signatures.
+  BindLimits(m);
+  BindCurve(m);
+  BindProblem(m);
+  BindResults(m);
+  BindSolve(m);
 }
 
 }  // namespace timeopt::python

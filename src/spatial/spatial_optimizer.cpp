@@ -136,37 +136,18 @@ bool SpatialOptimizerOptions::IsValid(std::string* error) const {
   return true;
 }
 
-SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& waypoints,
-                                   const SpatialOptimizerOptions& options) {
-  using Clock = std::chrono::steady_clock;
-  const auto started = Clock::now();
-  SpatialResult result;
-  std::string error;
-  if (!options.IsValid(&error)) {
-    result.status = SpatialStatus::kInvalidInput;
-    result.message = "options." + error;
-    return result;
-  }
-  if (waypoints.cols() < 2 || !waypoints.allFinite()) {
-    result.status = SpatialStatus::kInvalidInput;
-    std::ostringstream s;
-    s << "waypoints: expected at least 2 finite columns, got " << waypoints.cols();
-    if (waypoints.cols() >= 2) s << " with a non-finite value";
-    result.message = s.str();
-    return result;
-  }
-  const int m = static_cast<int>(waypoints.cols()) - 1;
-  const bool coupled = options.formulation == SpatialFormulation::kTimeCoupled;
+namespace {
 
-  // Piece durations: in s for the spatial formulation (1, or by chord; mean 1), heuristic times in
-  // the baseline.
+// Piece durations: in s for the spatial formulation (1, or by chord; mean 1), heuristic times in
+// the time-coupled baseline.
+std::vector<double> PieceDurations(const Waypoints& waypoints, const SpatialOptimizerOptions& options) {
+  const int m = static_cast<int>(waypoints.cols()) - 1;
   std::vector<double> durations(m, 1.0);
-  if (coupled) {
+  if (options.formulation == SpatialFormulation::kTimeCoupled) {
     for (int i = 0; i < m; ++i) {
       const double chord = (waypoints.col(i + 1) - waypoints.col(i)).norm();
       durations[i] = std::max(chord / options.heuristic_speed, options.min_piece_duration);
     }
-    result.durations = durations;
   } else if (options.parameterization != SpatialParameterization::kUniform) {
     double sum = 0.0;
     for (int i = 0; i < m; ++i) {
@@ -178,10 +159,16 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     const double mean = sum > 0.0 ? sum / m : 1.0;
     for (double& d : durations) d = std::max(d / mean, 0.01);
   }
-  const bool scaled = coupled || options.parameterization != SpatialParameterization::kUniform;
+  return durations;
+}
 
-  // Initial joint states from the minimum-jerk spline in s (rest to rest, or from the given start
-  // derivatives).
+// Initial joint states (kJointSize values per joint: position, first and second derivative) from
+// the minimum-jerk spline in s (rest to rest, or from the given start derivatives).
+std::vector<double> InitialJoints(const Waypoints& waypoints, const SpatialOptimizerOptions& options,
+                                  const std::vector<double>& durations) {
+  const int m = static_cast<int>(waypoints.cols()) - 1;
+  const bool coupled = options.formulation == SpatialFormulation::kTimeCoupled;
+  const bool scaled = coupled || options.parameterization != SpatialParameterization::kUniform;
   EndDerivatives ends = EndDerivatives::RestToRest();
   if (!coupled) {
     ends.start_velocity = options.start_tangent;
@@ -211,59 +198,157 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     Eigen::Map<Eigen::Vector3d>(x + 3, 3) = d1;
     Eigen::Map<Eigen::Vector3d>(x + 6, 3) = d2;
   }
+  return joints;
+}
 
-  ceres::Problem problem;
+// The residual blocks of each cost term, for the cost breakdown.
+struct CostGroups {
+  std::vector<ceres::ResidualBlockId> smooth, collision, length, dynamic;
+
+  SpatialCostBreakdown Breakdown(ceres::Problem& problem) const {
+    SpatialCostBreakdown b;
+    b.smoothness = GroupCost(problem, smooth);
+    b.collision = GroupCost(problem, collision);
+    b.length = GroupCost(problem, length);
+    b.dynamic = GroupCost(problem, dynamic);
+    return b;
+  }
+};
+
+// Every piece's cost terms over its two joints; the end joints are held constant.
+CostGroups AddCosts(const DistanceField& field, const SpatialOptimizerOptions& options,
+                    const std::vector<double>& durations, std::vector<double>* joints, ceres::Problem* problem) {
+  const int m = static_cast<int>(durations.size());
+  const bool coupled = options.formulation == SpatialFormulation::kTimeCoupled;
   const auto& hermite = spatial_internal::QuinticHermite::Get();
   const Eigen::MatrixXd jerk_factor = hermite.Factor(3);
   const Eigen::MatrixXd length_factor = hermite.Factor(1);
   spatial_internal::CollisionPenalty penalty;
   penalty.safe_distance = options.safe_distance;
   penalty.decay_length = options.penalty_decay_length;
-  std::vector<ceres::ResidualBlockId> smooth_ids, collision_ids, length_ids, dynamic_ids;
+  CostGroups groups;
   for (int i = 0; i < m; ++i) {
-    double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
+    double* x0 = &(*joints)[static_cast<size_t>(kJointSize) * i];
     double* x1 = x0 + kJointSize;
     const double t = durations[i];
     const Eigen::Matrix<double, 6, 1> scale = spatial_internal::PieceScale(t);
     // In time: integral_0^T |d3p/dt3|^2 dt = J_s / T^5 and integral_0^T |dp/dt|^2 dt = L_s / T.
     if (options.smoothness_weight > 0.0) {
-      smooth_ids.push_back(problem.AddResidualBlock(
+      groups.smooth.push_back(problem->AddResidualBlock(
           new spatial_internal::QuadraticFormCost(jerk_factor, scale, options.smoothness_weight / std::pow(t, 5)),
           nullptr, x0, x1));
     }
     if (options.length_weight > 0.0) {
-      length_ids.push_back(problem.AddResidualBlock(
+      groups.length.push_back(problem->AddResidualBlock(
           new spatial_internal::QuadraticFormCost(length_factor, scale, options.length_weight / t), nullptr, x0, x1));
     }
     if (options.collision_weight > 0.0) {
-      collision_ids.push_back(problem.AddResidualBlock(
+      groups.collision.push_back(problem->AddResidualBlock(
           new spatial_internal::CollisionCost(&field, penalty, options.collision_samples_per_piece, scale,
                                               options.collision_weight, options.tangent_epsilon),
           nullptr, x0, x1));
     }
     if (coupled && options.dynamic_weight > 0.0) {
-      dynamic_ids.push_back(problem.AddResidualBlock(
+      groups.dynamic.push_back(problem->AddResidualBlock(
           new spatial_internal::DynamicPenaltyCost(t, options.max_velocity, options.max_acceleration,
                                                    options.dynamic_samples_per_piece, options.dynamic_weight),
           nullptr, x0, x1));
     }
   }
   for (int j = 0; j <= m; ++j) {
-    double* x = &joints[static_cast<size_t>(kJointSize) * j];
-    if (!problem.HasParameterBlock(x)) problem.AddParameterBlock(x, kJointSize);
+    double* x = &(*joints)[static_cast<size_t>(kJointSize) * j];
+    if (!problem->HasParameterBlock(x)) problem->AddParameterBlock(x, kJointSize);
   }
-  problem.SetParameterBlockConstant(joints.data());
-  problem.SetParameterBlockConstant(&joints[static_cast<size_t>(kJointSize) * m]);
+  problem->SetParameterBlockConstant(joints->data());
+  problem->SetParameterBlockConstant(&(*joints)[static_cast<size_t>(kJointSize) * m]);
+  return groups;
+}
 
-  auto breakdown = [&]() {
-    SpatialCostBreakdown b;
-    b.smoothness = GroupCost(problem, smooth_ids);
-    b.collision = GroupCost(problem, collision_ids);
-    b.length = GroupCost(problem, length_ids);
-    b.dynamic = GroupCost(problem, dynamic_ids);
-    return b;
-  };
-  result.initial_cost = breakdown();
+// Levenberg-Marquardt on the problem; sets result's status, message and iterations.
+void Minimize(const SpatialOptimizerOptions& options, ceres::Problem* problem, SpatialResult* result) {
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type =
+      options.linear_solver == SpatialLinearSolver::kDenseQr ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
+  solver.max_num_iterations = options.max_iterations;
+  solver.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+  solver.function_tolerance = options.function_tolerance;
+  solver.gradient_tolerance = options.gradient_tolerance;
+  solver.parameter_tolerance = options.parameter_tolerance;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  solver.minimizer_progress_to_stdout = false;
+  RecordingCallback callback(&result->iterations);
+  solver.callbacks.push_back(&callback);
+  std::string solver_error;
+  if (!solver.IsValid(&solver_error)) {
+    result->status = SpatialStatus::kInvalidInput;
+    result->message = "ceres options: " + solver_error;
+    return;
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, problem, &summary);
+  switch (summary.termination_type) {
+    case ceres::CONVERGENCE:
+    case ceres::USER_SUCCESS:
+      result->status = SpatialStatus::kConverged;
+      break;
+    case ceres::NO_CONVERGENCE:
+      result->status = SpatialStatus::kIterationLimit;
+      break;
+    default:
+      result->status = SpatialStatus::kFailure;
+      break;
+  }
+  result->message = summary.message;
+  if (!summary.IsSolutionUsable()) result->status = SpatialStatus::kFailure;
+}
+
+// The curve of the joint states: one quintic Hermite piece per pair of joints.
+PiecewiseCurve CurveFromJoints(const std::vector<double>& joints, const std::vector<double>& durations) {
+  const auto& hermite = spatial_internal::QuinticHermite::Get();
+  const int m = static_cast<int>(durations.size());
+  std::vector<PolynomialPiece> pieces;
+  pieces.reserve(m);
+  for (int i = 0; i < m; ++i) {
+    const double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
+    const Eigen::Matrix<double, 3, 6> q =
+        spatial_internal::PieceData(x0, x0 + kJointSize, spatial_internal::PieceScale(durations[i]));
+    pieces.emplace_back(PolynomialPiece::Coefficients(q * hermite.monomials().transpose()));
+  }
+  return PiecewiseCurve(std::move(pieces));
+}
+
+}  // namespace
+
+SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& waypoints,
+                                   const SpatialOptimizerOptions& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto started = Clock::now();
+  SpatialResult result;
+  std::string error;
+  if (!options.IsValid(&error)) {
+    result.status = SpatialStatus::kInvalidInput;
+    result.message = "options." + error;
+    return result;
+  }
+  if (waypoints.cols() < 2 || !waypoints.allFinite()) {
+    result.status = SpatialStatus::kInvalidInput;
+    std::ostringstream s;
+    s << "waypoints: expected at least 2 finite columns, got " << waypoints.cols();
+    if (waypoints.cols() >= 2) s << " with a non-finite value";
+    result.message = s.str();
+    return result;
+  }
+  const int m = static_cast<int>(waypoints.cols()) - 1;
+  const std::vector<double> durations = PieceDurations(waypoints, options);
+  if (options.formulation == SpatialFormulation::kTimeCoupled) result.durations = durations;
+  std::vector<double> joints = InitialJoints(waypoints, options, durations);
+
+  ceres::Problem problem;
+  const CostGroups groups = AddCosts(field, options, durations, &joints, &problem);
+  result.initial_cost = groups.Breakdown(problem);
   if (!std::isfinite(result.initial_cost.total())) {
     result.status = SpatialStatus::kFailure;
     result.message = "the initial cost is not finite";
@@ -271,43 +356,8 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
   }
 
   if (m >= 2 && problem.NumResidualBlocks() > 0) {
-    ceres::Solver::Options solver;
-    solver.minimizer_type = ceres::TRUST_REGION;
-    solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver.linear_solver_type =
-        options.linear_solver == SpatialLinearSolver::kDenseQr ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
-    solver.max_num_iterations = options.max_iterations;
-    solver.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
-    solver.function_tolerance = options.function_tolerance;
-    solver.gradient_tolerance = options.gradient_tolerance;
-    solver.parameter_tolerance = options.parameter_tolerance;
-    solver.num_threads = 1;
-    solver.logging_type = ceres::SILENT;
-    solver.minimizer_progress_to_stdout = false;
-    RecordingCallback callback(&result.iterations);
-    solver.callbacks.push_back(&callback);
-    std::string solver_error;
-    if (!solver.IsValid(&solver_error)) {
-      result.status = SpatialStatus::kInvalidInput;
-      result.message = "ceres options: " + solver_error;
-      return result;
-    }
-    ceres::Solver::Summary summary;
-    ceres::Solve(solver, &problem, &summary);
-    switch (summary.termination_type) {
-      case ceres::CONVERGENCE:
-      case ceres::USER_SUCCESS:
-        result.status = SpatialStatus::kConverged;
-        break;
-      case ceres::NO_CONVERGENCE:
-        result.status = SpatialStatus::kIterationLimit;
-        break;
-      default:
-        result.status = SpatialStatus::kFailure;
-        break;
-    }
-    result.message = summary.message;
-    if (!summary.IsSolutionUsable()) result.status = SpatialStatus::kFailure;
+    Minimize(options, &problem, &result);
+    if (result.status == SpatialStatus::kInvalidInput) return result;
   } else {
     // One piece between fixed end states: nothing to optimize.
     result.status = SpatialStatus::kConverged;
@@ -318,17 +368,8 @@ SpatialResult OptimizeSpatialCurve(const DistanceField& field, const Waypoints& 
     result.solve_time_seconds = std::chrono::duration<double>(Clock::now() - started).count();
     return result;
   }
-  result.final_cost = breakdown();
-
-  std::vector<PolynomialPiece> pieces;
-  pieces.reserve(m);
-  for (int i = 0; i < m; ++i) {
-    const double* x0 = &joints[static_cast<size_t>(kJointSize) * i];
-    const Eigen::Matrix<double, 3, 6> q =
-        spatial_internal::PieceData(x0, x0 + kJointSize, spatial_internal::PieceScale(durations[i]));
-    pieces.emplace_back(PolynomialPiece::Coefficients(q * hermite.monomials().transpose()));
-  }
-  result.curve = PiecewiseCurve(std::move(pieces));
+  result.final_cost = groups.Breakdown(problem);
+  result.curve = CurveFromJoints(joints, durations);
   result.solve_time_seconds = std::chrono::duration<double>(Clock::now() - started).count();
   for (int i = 0; i < result.curve.num_pieces(); ++i) {
     if (!result.curve.piece(i).coefficients().allFinite()) {
