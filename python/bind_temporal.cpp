@@ -157,13 +157,15 @@ void BindCurve(py::module_& m) {
       .def_static(
           "from_waypoints",
           [](const py::handle& waypoints, const std::string& kind) {
-            const Eigen::Matrix3Xd w = Points(waypoints, "waypoints");
+            const Eigen::Matrix3Xd w = MergeCoincidentWaypoints(Points(waypoints, "waypoints"));
             if (kind == "cubic") return NaturalCubicSpline(w);
             if (kind == "minjerk") return MinimumJerkSpline(w);
             throw py::value_error("kind: expected 'cubic' or 'minjerk', got '" + kind + "'");
           },
           py::arg("waypoints"), py::arg("kind") = "minjerk",
-          "A curve through (N, 3) waypoints: 'minjerk' (rest to rest, C4 inside) or 'cubic' (natural, C2).")
+          "A curve through (N, 3) waypoints: 'minjerk' (rest to rest, C4 inside) or 'cubic' (natural, C2). A "
+          "waypoint that coincides with the one before (within 1e-6 of the waypoints' extent) is dropped: "
+          "the curve has a piece per distinct step.")
       .def_static(
           "load", [](const std::string& path) { return ReadCurveJson(path).curve; }, py::arg("path"),
           "A curve from a curve JSON file (docs/formats.md).")

@@ -20,19 +20,25 @@ struct CurveArgs {
 };
 
 int RunCurve(const CurveArgs& args) {
-  const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
+  int merged = 0;
+  const Waypoints waypoints =
+      MergeCoincidentWaypoints(ReadWaypointsCsv(args.waypoints), kCoincidentWaypointFraction, &merged);
   const PiecewiseCurve curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   WriteCurveJson(curve, args.output);
 
   const ContinuityReport report = curve.Continuity(4);
   const double length = curve.ArcLength(1e-9);
   if (args.json) {
-    nlohmann::ordered_json j = {{"kind", args.kind}, {"waypoints", waypoints.cols()}, {"pieces", curve.num_pieces()},
-                                {"length", length},  {"continuity", report.jump},     {"output", args.output}};
+    nlohmann::ordered_json j = {{"kind", args.kind},          {"waypoints", waypoints.cols()},
+                                {"merged_waypoints", merged}, {"pieces", curve.num_pieces()},
+                                {"length", length},           {"continuity", report.jump},
+                                {"output", args.output}};
     std::cout << j.dump(2) << "\n";
     return kExitOk;
   }
-  std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints\n"
+  std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints"
+            << (merged > 0 ? " (" + std::to_string(merged) + " more dropped: each coincided with the one before)" : "")
+            << "\n"
             << "pieces: " << curve.num_pieces() << "\n"
             << std::setprecision(9) << "length: " << length << " m\n"
             << "continuity (largest jump at the joints):\n";

@@ -160,7 +160,9 @@ std::string FormatNumber(double value) {
 }
 
 int RunWaypoints(const WaypointsArgs& args) {
-  const Waypoints waypoints = ReadWaypointsCsv(args.waypoints);
+  int merged = 0;
+  const Waypoints waypoints =
+      MergeCoincidentWaypoints(ReadWaypointsCsv(args.waypoints), kCoincidentWaypointFraction, &merged);
   TemporalProblem problem;
   problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   constexpr double kNone = std::numeric_limits<double>::infinity();
@@ -185,7 +187,9 @@ int RunWaypoints(const WaypointsArgs& args) {
   WriteCurveJson(problem.curve, (dir / "curve.json").string());
 
   if (args.verbose) {
-    std::cerr << "timeopt waypoints: curve: " << args.kind << ", " << problem.curve.num_pieces() << " pieces\n";
+    std::cerr << "timeopt waypoints: curve: " << args.kind << ", " << problem.curve.num_pieces() << " pieces";
+    if (merged > 0) std::cerr << " (" << merged << " coincident waypoints dropped)";
+    std::cerr << "\n";
   }
   const auto solver = BudgetedSolver(problem, args.solver, args.max_memory_mib, args.ipopt_seconds);
   const TemporalResult result = solver->Solve(problem);
@@ -205,6 +209,7 @@ int RunWaypoints(const WaypointsArgs& args) {
   }
   // result.json: the result and the flight block (as in `plan`'s summary).
   nlohmann::json result_json = nlohmann::json::parse(TemporalResultToJson(result));
+  result_json["merged_waypoints"] = merged;
   const Trajectory trajectory(problem.curve, result.profile);
   WriteTextFile((dir / "samples.csv").string(), SamplesToCsv(trajectory.Sample(args.rate)));
   WriteTrajectoryJson(trajectory, (dir / "trajectory.json").string());
@@ -236,8 +241,10 @@ int RunWaypoints(const WaypointsArgs& args) {
     return kExitOk;
   }
   if (args.quiet) return kExitOk;
-  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << " (" << args.kind << " curve, "
-            << problem.curve.num_pieces() << " pieces, length " << problem.curve.ArcLength(1e-9) << " m)\n"
+  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols()
+            << (merged > 0 ? " (" + std::to_string(merged) + " more dropped: each coincided with the one before)" : "")
+            << " (" << args.kind << " curve, " << problem.curve.num_pieces() << " pieces, length "
+            << problem.curve.ArcLength(1e-9) << " m)\n"
             << "limits: " << LimitsLine(problem.limits)
             << (args.max_jerk > 0.0 ? "max_jerk " + FormatNumber(args.max_jerk) + " m/s^3, " : std::string()) << "K "
             << args.K << ", rho " << args.rho << ", " << args.constraint_mode << " constraints\n"

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "banded_solver.h"
 
@@ -53,6 +54,34 @@ EndDerivatives EndDerivatives::RestToRest() {
   ends.start_velocity = ends.start_acceleration = Eigen::Vector3d::Zero();
   ends.end_velocity = ends.end_acceleration = Eigen::Vector3d::Zero();
   return ends;
+}
+
+Waypoints MergeCoincidentWaypoints(const Waypoints& waypoints, double fraction, int* merged) {
+  CheckWaypoints(waypoints, "MergeCoincidentWaypoints");
+  if (!(fraction >= 0.0 && fraction < 1.0)) {
+    throw std::invalid_argument("MergeCoincidentWaypoints: fraction must be in [0, 1), got " +
+                                std::to_string(fraction));
+  }
+  const double extent = (waypoints.rowwise().maxCoeff() - waypoints.rowwise().minCoeff()).norm();
+  const double tolerance = fraction * extent;
+  std::vector<Eigen::Index> kept = {0};
+  const Eigen::Index n = waypoints.cols();
+  for (Eigen::Index i = 1; i < n; ++i) {
+    const bool coincides = (waypoints.col(i) - waypoints.col(kept.back())).norm() <= tolerance;
+    if (!coincides) {
+      kept.push_back(i);
+    } else if (i == n - 1 && kept.size() > 1) {
+      kept.back() = i;  // the last waypoint is the goal: it replaces the one it coincides with
+    }
+  }
+  if (kept.size() < 2) {
+    throw std::invalid_argument("MergeCoincidentWaypoints: all " + std::to_string(n) + " waypoints coincide (within " +
+                                std::to_string(tolerance) + " m): there is no path through them");
+  }
+  if (merged != nullptr) *merged = static_cast<int>(n - static_cast<Eigen::Index>(kept.size()));
+  Waypoints out(3, static_cast<Eigen::Index>(kept.size()));
+  for (size_t k = 0; k < kept.size(); ++k) out.col(static_cast<Eigen::Index>(k)) = waypoints.col(kept[k]);
+  return out;
 }
 
 PiecewiseCurve NaturalCubicSpline(const Waypoints& p) {

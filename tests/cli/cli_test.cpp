@@ -368,6 +368,30 @@ TEST_F(CliTest, WaypointsDefaultsToAFlyableProfile) {
   EXPECT_LE(JsonNumberIn(json, "flight", "max_acceleration_ratio"), 1.01);
 }
 
+// A waypoint that repeats the one before (a CSV with the same point twice, or 1e-9 m apart) is
+// dropped: the time is that of the same file without it (the same problem, so the same bits), where
+// the vehicle had stopped at the repeat on a curve that looped back around it (3.82 s for 2.21 s).
+TEST_F(CliTest, WaypointsDropsACoincidentWaypoint) {
+  Write("dup.csv", "x,y,z\n0,0,0\n1,0,0\n1.000000001,0,0\n2,0,0\n");
+  Write("plain.csv", "x,y,z\n0,0,0\n1,0,0\n2,0,0\n");
+  const CliRun dup = RunCli("waypoints " + Path("dup.csv") + " --json --out-dir " + Path("wdup"), "2>/dev/null");
+  const CliRun plain = RunCli("waypoints " + Path("plain.csv") + " --json --out-dir " + Path("wplain"), "2>/dev/null");
+  ASSERT_EQ(dup.exit_code, 0) << dup.output;
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const nlohmann::json a = nlohmann::json::parse(dup.output), b = nlohmann::json::parse(plain.output);
+  EXPECT_EQ(a["merged_waypoints"].get<int>(), 1);
+  EXPECT_EQ(b["merged_waypoints"].get<int>(), 0);
+  EXPECT_EQ(a["total_time"].get<double>(), b["total_time"].get<double>());
+  EXPECT_EQ(a["piece_durations"].size(), 2u);
+  const CliRun text = RunCli("curve " + Path("dup.csv") + " -o " + Path("dup_curve.json"));
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_THAT(text.output, HasSubstr("3 waypoints (1 more dropped: each coincided with the one before)"));
+  Write("same.csv", "1,2,3\n1,2,3\n");
+  const CliRun same = RunCli("waypoints " + Path("same.csv") + " --out-dir " + Path("wsame"));
+  EXPECT_EQ(same.exit_code, 2);
+  EXPECT_THAT(same.output, HasSubstr("all 2 waypoints coincide"));
+}
+
 // `plan --print-config` prints the library's defaults as a planner configuration; the shipped
 // examples/planner_config.json is that text (so it cannot drift from the library), reading it back
 // gives it again (a round trip through ParsePlannerConfigJson), and flags land in it.

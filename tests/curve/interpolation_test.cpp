@@ -140,6 +140,46 @@ TEST(Interpolation, RejectsBadInput) {
   EXPECT_THROW(MinimumJerkSpline(Waypoints::Random(3, 2), EndDerivatives{}), std::invalid_argument);
 }
 
+// Coincident waypoints (within 1e-6 of the extent) are dropped, the last one replacing a kept one
+// it coincides with. Truth: the waypoints written without the duplicates, and the straight line's
+// length. Through the duplicate itself, the minimum-jerk spline loops back around it (a 2 m line
+// through (0, 1, 1 + 1e-9, 2) m is 2.35 m long), which is why it is dropped.
+TEST(MergeCoincidentWaypoints, DropsRepeatsAndKeepsTheEnds) {
+  Waypoints w(3, 4);
+  w << 0, 1, 1 + 1e-9, 2, 0, 0, 0, 0, 0, 0, 0, 0;
+  int merged = -1;
+  Waypoints out = MergeCoincidentWaypoints(w, kCoincidentWaypointFraction, &merged);
+  EXPECT_EQ(merged, 1);
+  ASSERT_EQ(out.cols(), 3);
+  EXPECT_EQ(out.col(0), w.col(0));
+  EXPECT_EQ(out.col(1), w.col(1));
+  EXPECT_EQ(out.col(2), w.col(3));
+  // The straight line: its length is the chord, 2 m, to the quadrature's 1e-9.
+  EXPECT_NEAR(MinimumJerkSpline(out).ArcLength(1e-12), 2.0, 1e-9);
+  EXPECT_GT(MinimumJerkSpline(w).ArcLength(1e-12), 2.3);
+  // A goal that repeats the waypoint before it replaces that waypoint; exact repeats too.
+  Waypoints end(3, 5);
+  end << 0, 1, 1, 2, 2 + 1e-9, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0;
+  out = MergeCoincidentWaypoints(end, kCoincidentWaypointFraction, &merged);
+  EXPECT_EQ(merged, 2);
+  ASSERT_EQ(out.cols(), 3);
+  EXPECT_EQ(out.col(2), end.col(4));
+  // Steps above the tolerance stay (1e-5 of a 2 m extent), and fraction 0 keeps all but exact repeats.
+  Waypoints near(3, 3);
+  near << 0, 2e-5, 2, 0, 0, 0, 0, 0, 0;
+  EXPECT_EQ(MergeCoincidentWaypoints(near).cols(), 3);
+  EXPECT_EQ(MergeCoincidentWaypoints(end, 0.0).cols(), 4);
+  // Nothing to fly: every waypoint coincides; a fraction out of range.
+  try {
+    MergeCoincidentWaypoints(Waypoints::Ones(3, 4));
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("all 4 waypoints coincide"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(MergeCoincidentWaypoints(near, 1.0), std::invalid_argument);
+  EXPECT_THROW(MergeCoincidentWaypoints(near, -1.0), std::invalid_argument);
+}
+
 // A curve 1e8 m long: the 1e-9 m default tolerance is below the rounding of |f'| there. The
 // quadrature stops at 1e-13 of each piece's length (it used to recurse 2^40 wide: a hang) and
 // agrees with composite Simpson on 2e5 panels per piece to 1e-9 relative.

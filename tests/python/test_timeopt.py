@@ -80,6 +80,19 @@ def test_defaults_are_the_planners_flyable_ones():
         assert ratio <= 1 + 1e-6
 
 
+def test_a_coincident_waypoint_is_dropped():
+    # The same point twice (or 1e-9 m apart) is one waypoint: the curve is that of the distinct
+    # ones, the straight line here (length 2 m, against 2.35 m when the spline looped around it).
+    repeated = np.array([[0, 0, 0], [1, 0, 0], [1 + 1e-9, 0, 0], [2, 0, 0]], dtype=float)
+    curve = timeopt.Curve.from_waypoints(repeated)
+    assert curve.num_pieces == 2
+    distinct = timeopt.Curve.from_waypoints(repeated[[0, 1, 3]])
+    np.testing.assert_array_equal(curve.pieces[0], distinct.pieces[0])
+    assert abs(curve.arc_length() - 2.0) < 1e-9
+    with pytest.raises(ValueError, match="all 3 waypoints coincide"):
+        timeopt.Curve.from_waypoints(np.ones((3, 3)))
+
+
 def test_curve_evaluation_matches_the_coefficients_and_finite_differences():
     waypoints = np.array([[0, 0, 1], [3, 1, 1.5], [5, -2, 1], [8, 0, 2]], dtype=float)
     curve = timeopt.Curve.from_waypoints(waypoints, kind="minjerk")
