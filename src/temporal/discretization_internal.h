@@ -304,8 +304,14 @@ void RestAlphaOfConstantJerk(const TemporalDiscretization& d, std::vector<double
 // The linearization point of a cell's jerk rows: the largest b of the quadratic through the
 // previous solution's three half-grid values lb, at least floor.
 double LinearizationPoint(const double (&lb)[3], double floor);
-// The floor of LinearizationPoint for a linearization (b at every half-grid value).
-double LinearizationFloor(const std::vector<double>& linearization);
+// The floors of LinearizationPoint for a linearization (b at every half-grid value of the jerk
+// discretization d), one per piece: kLinearizationFloor times the piece's largest b. Per piece,
+// not over the curve: b scales as 1 / |f'|^2, and a floor taken over the curve had linearized the
+// jerk rows of a 1 m piece far above its b (so far too tight) beside a 1 mm piece whose b is 1e6
+// times larger (a 2 m line in pieces of 1 m, 1 mm and 1 m was "optimal" at 2.5 x its time).
+std::vector<double> LinearizationFloors(const TemporalDiscretization& d, const std::vector<double>& linearization);
+// The piece of half-grid value g of the jerk discretization d.
+inline int PieceOf(const TemporalDiscretization& d, int g) { return g / (d.cells_per_piece + 1); }
 
 // The control values of a jerk-limited discretization (ControlBasis; control_basis.cpp), from its
 // shapes, cell edges, grid values and joints, with the sddot that a boundary acceleration fixes at

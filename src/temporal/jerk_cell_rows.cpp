@@ -544,8 +544,8 @@ void AddLinearizedJerkRows(JerkContext& c, int piece, int k, int axis, int g0, c
     }
     // Never linearize at b near 0: the tangent would be nearly vertical and its row badly
     // scaled (a floor of 1e-12 made the conic solver stall). Any b > 0 keeps the row
-    // conservative; below bbar_floor the rows only loosen.
-    b = std::max(b, c.bbar_floor);
+    // conservative; below the floor the rows only loosen.
+    b = std::max(b, c.bbar_floors[static_cast<size_t>(piece)]);
     static_assert(kJerkSegments == 1, "LinearizationPoint is the one-part rule");
     const double kappa = jmax / (2.0 * b * std::sqrt(b));
     const double bound = 3.0 * jmax / (2.0 * std::sqrt(b));

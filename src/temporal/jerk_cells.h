@@ -17,7 +17,7 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 // Relative tolerance for "the boundary acceleration's part across the path equals f'' sdot^2"
 // and "the curvature is continuous across a joint": rounding of fitted curves is ~1e-12.
 inline constexpr double kNormalTolerance = 1e-6;
-// The jerk rows' smallest linearization point relative to the largest b (see bbar_floor).
+// The jerk rows' smallest linearization point relative to the largest b (see bbar_floors).
 inline constexpr double kLinearizationFloor = 1e-4;
 // Parts of a regular cell with their own linearization of the jerk rows (see AddCellRows).
 inline constexpr int kJerkSegments = 1;
@@ -60,9 +60,9 @@ struct JerkContext {
   BernsteinTable bernstein;
   int K = 0;
   double ds = 0.0;  // the nominal cell length 1 / K (for scaling rows)
-  // The smallest linearization point of the jerk rows: kLinearizationFloor times the largest b of
-  // the linearization.
-  double bbar_floor = 0.0;
+  // The smallest linearization point of the jerk rows per piece: kLinearizationFloor times the
+  // largest b of the linearization on the piece (LinearizationFloors).
+  std::vector<double> bbar_floors;
   // Derivatives 1..3 of every piece (rows: axes).
   std::vector<std::array<PolynomialPiece::Coefficients, 3>> derivatives;
   // Where the regular cells' velocity, acceleration and jerk rows go (DiscretizeJerkLimitedTemplates),

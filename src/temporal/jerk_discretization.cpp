@@ -234,10 +234,14 @@ void RestAlphaOfConstantJerk(const TemporalDiscretization& d, std::vector<double
   ForEachRestCell(d, [&](size_t alpha, size_t far) { (*b)[alpha] = (*b)[far]; });
 }
 
-double LinearizationFloor(const std::vector<double>& linearization) {
-  double largest = 0.0;
-  for (double b : linearization) largest = std::max(largest, b);
-  return std::max(kLinearizationFloor * largest, std::numeric_limits<double>::min());
+std::vector<double> LinearizationFloors(const TemporalDiscretization& d, const std::vector<double>& linearization) {
+  std::vector<double> largest(static_cast<size_t>(d.num_pieces), 0.0);
+  for (size_t g = 0; g < linearization.size(); ++g) {
+    double& l = largest[static_cast<size_t>(PieceOf(d, static_cast<int>(g)))];
+    l = std::max(l, linearization[g]);
+  }
+  for (double& l : largest) l = std::max(kLinearizationFloor * l, std::numeric_limits<double>::min());
+  return largest;
 }
 
 TemporalDiscretization DiscretizeJerkLimitedTemplates(const TemporalProblem& problem, JerkTemplates* templates) {
@@ -302,8 +306,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   internal::MakeCells(half, &d);
   internal::CheckBoundaryAccelerations(problem, &d);
 
-  JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, 0.0, {}, templates, -1, {}, {}, {}};
-  if (linearization != nullptr) c.bbar_floor = internal::LinearizationFloor(*linearization);
+  JerkContext c{problem, d, RowBuilder(d), BernsteinTable(), K, 1.0 / K, {}, {}, templates, -1, {}, {}, {}};
+  if (linearization != nullptr) c.bbar_floors = internal::LinearizationFloors(d, *linearization);
   for (int i = 0; i < m; ++i) {
     std::array<PolynomialPiece::Coefficients, 3> derivative;
     for (int order = 1; order <= 3; ++order) {

@@ -59,20 +59,21 @@ constexpr double kLooseBound = 1000.0;
 // part's) templates are consecutive, so bbar is found once per cell or part.
 class JerkCoefficients {
  public:
-  explicit JerkCoefficients(const std::vector<double>& linearization)
-      : linearization_(linearization), floor_(internal::LinearizationFloor(linearization)) {}
+  JerkCoefficients(const TemporalDiscretization& d, const std::vector<double>& linearization)
+      : d_(d), linearization_(linearization), floors_(internal::LinearizationFloors(d, linearization)) {}
   std::array<double, 3> operator()(const internal::JerkRowTemplate& t) {
     if (t.g0 != g0_ || t.part != part_) {
       g0_ = t.g0;
       part_ = t.part;
       const size_t g = static_cast<size_t>(t.g0);
       const double lb[3] = {linearization_[g], linearization_[g + 1], linearization_[g + 2]};
+      const double floor = floors_[static_cast<size_t>(internal::PieceOf(d_, t.g0))];
       double bbar = 0.0;
       if (t.rest_far < 0) {
-        bbar = internal::LinearizationPoint(lb, floor_);
+        bbar = internal::LinearizationPoint(lb, floor);
       } else {
         const double alpha = lb[1], far = lb[t.rest_far];
-        bbar = std::max({alpha + (far - alpha) * t.w0(), alpha + (far - alpha) * t.w1(), floor_});
+        bbar = std::max({alpha + (far - alpha) * t.w0(), alpha + (far - alpha) * t.w1(), floor});
       }
       root_ = 2.0 * std::sqrt(bbar) / 3.0;
       cb_ = 1.0 / (3.0 * bbar);
@@ -81,8 +82,9 @@ class JerkCoefficients {
   }
 
  private:
+  const TemporalDiscretization& d_;
   const std::vector<double>& linearization_;
-  double floor_;
+  std::vector<double> floors_;
   int g0_ = -1;
   int part_ = -1;
   double root_ = 0.0, cb_ = 0.0;
@@ -96,7 +98,7 @@ class JerkCoefficients {
 double PredictedGain(const TemporalDiscretization& d, const internal::JerkTemplates& templates, size_t static_rows,
                      const std::vector<double>& z_by_id, const std::vector<double>& linearization,
                      const std::vector<double>& answer) {
-  JerkCoefficients old_rows(linearization), new_rows(answer);
+  JerkCoefficients old_rows(d, linearization), new_rows(d, answer);
   // A row's value minus its bound at the answer, scaled as BandedProblem scales it.
   const auto excess = [&](const internal::JerkRowTemplate& t, const std::array<double, 3>& coef) {
     double value = -1.0, fixed = 1.0;
@@ -240,7 +242,7 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
   };
   for (size_t ci = 0; ci < cell_rows; ++ci) set_flat(ci, templates.cell_rows[ci].g0, templates.cell_rows[ci].coef);
   const auto set_jerk_flat = [&](const std::vector<double>& at) {
-    JerkCoefficients jerk_coefficients(at);
+    JerkCoefficients jerk_coefficients(d, at);
     for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
       const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
       set_flat(cell_rows + ti, t.g0, jerk_coefficients(t));
