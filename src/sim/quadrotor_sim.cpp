@@ -143,7 +143,7 @@ class ExtendedReference {
 class FlightExtremes {
  public:
   FlightExtremes(const VehicleLimits& limits, FeasibilityReport* report)
-      : limits_(limits), report_(*report), quadrotor_(limits.HasNormLimits()), up_(0.0, 0.0, limits.gravity) {}
+      : limits_(limits), report_(*report), quadrotor_(limits.HasNormLimits()) {}
 
   bool quadrotor() const { return quadrotor_; }
   int velocity_axis() const { return velocity_axis_; }
@@ -174,14 +174,7 @@ class FlightExtremes {
   // Writes the quadrotor's ratios into the report; returns the limits they exceed beyond `bound`
   // ("" when none does).
   std::string QuadrotorRatios(double bound) {
-    if (limits_.max_speed) report_.max_speed_ratio = speed_ / *limits_.max_speed;
-    if (limits_.max_acceleration_norm) report_.max_acceleration_norm_ratio = acc_norm_ / *limits_.max_acceleration_norm;
-    if (limits_.max_thrust) report_.max_thrust_ratio = thrust_max_ / *limits_.max_thrust;
-    if (limits_.min_thrust) {
-      report_.min_thrust_ratio =
-          thrust_min_ > 0.0 ? *limits_.min_thrust / thrust_min_ : std::numeric_limits<double>::infinity();
-    }
-    if (limits_.max_tilt) report_.max_tilt_ratio = tilt_ / *limits_.max_tilt;
+    quadrotor_extremes_.WriteRatios(limits_, &report_);
     std::string failed;
     const auto check = [&](const std::optional<double>& ratio, const char* name) {
       if (ratio && !(*ratio <= bound)) {
@@ -215,28 +208,30 @@ class FlightExtremes {
       acceleration_axis_ = axis;
     }
   }
-  // The quadrotor's limits over one step from (v0, a0) with jerk u0 held for h (h = 0: the point).
+  // The quadrotor's limits over one step from (v0, a0) with jerk u0 held for h (h = 0: the point):
+  // the speed at both ends and the middle, the acceleration and the thrust at both ends (they are
+  // linear over the step, so their norms are largest at an end), the smallest thrust where the
+  // thrust is nearest zero over the step.
   void NoteQuadrotor(const Eigen::Vector3d& v0, const Eigen::Vector3d& a0, const Eigen::Vector3d& u0, double h) {
     if (!quadrotor_) return;
+    QuadrotorExtremes& e = quadrotor_extremes_;
     const Eigen::Vector3d a1 = a0 + u0 * h;
-    speed_ = std::max(
-        {speed_, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(), (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
-    acc_norm_ = std::max({acc_norm_, a0.norm(), a1.norm()});
-    const Eigen::Vector3d w0 = a0 + up_, w1 = a1 + up_;
-    thrust_max_ = std::max({thrust_max_, w0.norm(), w1.norm()});
+    e.speed = std::max(
+        {e.speed, v0.norm(), (v0 + a0 * h + 0.5 * u0 * h * h).norm(), (v0 + 0.5 * h * a0 + 0.125 * h * h * u0).norm()});
+    e.acceleration_norm = std::max({e.acceleration_norm, a0.norm(), a1.norm()});
+    const Eigen::Vector3d w0 = ThrustVector(a0, limits_.gravity), w1 = ThrustVector(a1, limits_.gravity);
+    e.max_thrust = std::max({e.max_thrust, w0.norm(), w1.norm()});
     const double uu = u0.squaredNorm();
     const double tau = uu > 0.0 ? std::clamp(-w0.dot(u0) / uu, 0.0, h) : 0.0;
-    thrust_min_ = std::min({thrust_min_, (w0 + u0 * tau).norm(), w1.norm()});
-    tilt_ = std::max({tilt_, std::atan2(w0.head<2>().norm(), w0(2)), std::atan2(w1.head<2>().norm(), w1(2))});
+    e.min_thrust = std::min({e.min_thrust, (w0 + u0 * tau).norm(), w1.norm()});
+    e.tilt = std::max({e.tilt, Tilt(w0), Tilt(w1)});
   }
 
   const VehicleLimits& limits_;
   FeasibilityReport& report_;
   const bool quadrotor_;
-  const Eigen::Vector3d up_;
   int velocity_axis_ = 0, acceleration_axis_ = 0;
-  double speed_ = 0.0, acc_norm_ = 0.0, thrust_max_ = 0.0, tilt_ = 0.0;
-  double thrust_min_ = std::numeric_limits<double>::infinity();
+  QuadrotorExtremes quadrotor_extremes_;
 };
 
 // The verdict of a flight whose extremes are in the report, and its message.

@@ -6,9 +6,11 @@
 #include <functional>
 #include <limits>
 #include <new>
+#include <optional>
 #include <queue>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "timeopt/core/enum_strings.h"
 #include "timeopt/core/option_check.h"
@@ -44,6 +46,67 @@ std::string Format(const Eigen::Vector3d& p) {
   std::ostringstream s;
   s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
   return s.str();
+}
+
+// The corners of a voxel path (start, voxel centres, goal) shortcut by line of sight: from each
+// corner, the farthest later point that the straight segment reaches while its samples (every
+// `line_of_sight_step` metres, 0: a quarter voxel) keep the clearance of the path between them,
+// between the robot radius and the inflated radius.
+std::vector<Eigen::Vector3d> Shortcut(const Esdf& esdf, const std::vector<Eigen::Vector3d>& points, double radius,
+                                      double inflated, double line_of_sight_step) {
+  if (points.size() <= 2) return points;
+  std::vector<double> clearance(points.size());
+  for (size_t k = 0; k < points.size(); ++k) clearance[k] = esdf.Distance(points[k]);
+  const double step = line_of_sight_step > 0.0 ? line_of_sight_step : 0.25 * esdf.resolution();
+  auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double threshold) {
+    const double length = (b - a).norm();
+    const int n = std::max(1, static_cast<int>(std::ceil(length / step)));
+    for (int k = 1; k < n; ++k) {
+      if (esdf.Distance(a + (b - a) * (static_cast<double>(k) / n)) < threshold) return false;
+    }
+    return true;
+  };
+  std::vector<Eigen::Vector3d> corners;
+  size_t i = 0;
+  corners.push_back(points[0]);
+  while (i + 1 < points.size()) {
+    // Extend the segment from point i as far as it stays visible.
+    size_t best = i + 1;
+    double path_min = std::min(clearance[i], clearance[i + 1]);
+    for (size_t j = i + 2; j < points.size(); ++j) {
+      path_min = std::min(path_min, clearance[j]);
+      const double threshold = std::max(radius, std::min(inflated, path_min));
+      if (!visible(points[i], points[j], threshold)) break;
+      best = j;
+    }
+    corners.push_back(points[best]);
+    i = best;
+  }
+  return corners;
+}
+
+// Why start and goal cannot be searched from and to (outside the field's domain, or closer to an
+// obstacle than the robot radius), or nullopt.
+std::optional<std::pair<PathSearchStatus, std::string>> CheckEnds(const Esdf& esdf, const Eigen::Vector3d& start,
+                                                                  const Eigen::Vector3d& goal, double radius) {
+  const Eigen::AlignedBox3d domain = esdf.domain();
+  auto outside = [&](const char* which, const Eigen::Vector3d& p) {
+    std::ostringstream s;
+    s << which << " " << Format(p) << " is outside the map's domain " << Format(domain.min()) << " - "
+      << Format(domain.max());
+    return s.str();
+  };
+  if (!esdf.Contains(start)) return std::make_pair(PathSearchStatus::kStartOutsideMap, outside("start", start));
+  if (!esdf.Contains(goal)) return std::make_pair(PathSearchStatus::kGoalOutsideMap, outside("goal", goal));
+  auto collides = [&](const char* which, const Eigen::Vector3d& p, double d) {
+    std::ostringstream s;
+    s << which << " " << Format(p) << " has clearance " << d << " m, below the robot radius " << radius << " m";
+    return s.str();
+  };
+  const double d_start = esdf.Distance(start), d_goal = esdf.Distance(goal);
+  if (d_start < radius) return std::make_pair(PathSearchStatus::kStartInCollision, collides("start", start, d_start));
+  if (d_goal < radius) return std::make_pair(PathSearchStatus::kGoalInCollision, collides("goal", goal, d_goal));
+  return std::nullopt;
 }
 
 }  // namespace
@@ -118,26 +181,8 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   if (!goal.allFinite()) return finish(PathSearchStatus::kInvalidInput, "goal: not finite");
 
   const Esdf& esdf = *esdf_;
-  const Eigen::AlignedBox3d domain = esdf.domain();
-  auto outside = [&](const char* which, const Eigen::Vector3d& p) {
-    std::ostringstream s;
-    s << which << " " << Format(p) << " is outside the map's domain " << Format(domain.min()) << " - "
-      << Format(domain.max());
-    return s.str();
-  };
-  if (!esdf.Contains(start)) return finish(PathSearchStatus::kStartOutsideMap, outside("start", start));
-  if (!esdf.Contains(goal)) return finish(PathSearchStatus::kGoalOutsideMap, outside("goal", goal));
   const double radius = options.robot_radius;
-  auto collides = [&](const char* which, const Eigen::Vector3d& p, double d) {
-    std::ostringstream s;
-    s << which << " " << Format(p) << " has clearance " << d << " m, below the robot radius " << radius << " m";
-    return s.str();
-  };
-  const double d_start = esdf.Distance(start), d_goal = esdf.Distance(goal);
-  if (d_start < radius) {
-    return finish(PathSearchStatus::kStartInCollision, collides("start", start, d_start));
-  }
-  if (d_goal < radius) return finish(PathSearchStatus::kGoalInCollision, collides("goal", goal, d_goal));
+  if (const auto bad = CheckEnds(esdf, start, goal, radius)) return finish(bad->first, bad->second);
 
   const VoxelBox& box = esdf.box();
   const double res = esdf.resolution();
@@ -250,37 +295,8 @@ PathSearchResult PathSearch::Search(const Eigen::Vector3d& start, const Eigen::V
   result.voxel_path.resize(3, static_cast<Eigen::Index>(points.size()));
   for (size_t k = 0; k < points.size(); ++k) result.voxel_path.col(static_cast<Eigen::Index>(k)) = points[k];
 
-  std::vector<Eigen::Vector3d> corners;
-  if (!options.shortcut || points.size() <= 2) {
-    corners = points;
-  } else {
-    std::vector<double> clearance(points.size());
-    for (size_t k = 0; k < points.size(); ++k) clearance[k] = esdf.Distance(points[k]);
-    const double step = options.line_of_sight_step > 0.0 ? options.line_of_sight_step : 0.25 * res;
-    auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, double threshold) {
-      const double length = (b - a).norm();
-      const int n = std::max(1, static_cast<int>(std::ceil(length / step)));
-      for (int k = 1; k < n; ++k) {
-        if (esdf.Distance(a + (b - a) * (static_cast<double>(k) / n)) < threshold) return false;
-      }
-      return true;
-    };
-    size_t i = 0;
-    corners.push_back(points[0]);
-    while (i + 1 < points.size()) {
-      // Extend the segment from point i as far as it stays visible.
-      size_t best = i + 1;
-      double path_min = std::min(clearance[i], clearance[i + 1]);
-      for (size_t j = i + 2; j < points.size(); ++j) {
-        path_min = std::min(path_min, clearance[j]);
-        const double threshold = std::max(radius, std::min(inflated, path_min));
-        if (!visible(points[i], points[j], threshold)) break;
-        best = j;
-      }
-      corners.push_back(points[best]);
-      i = best;
-    }
-  }
+  const std::vector<Eigen::Vector3d> corners =
+      options.shortcut ? Shortcut(esdf, points, radius, inflated, options.line_of_sight_step) : points;
   result.waypoints.resize(3, static_cast<Eigen::Index>(corners.size()));
   for (size_t k = 0; k < corners.size(); ++k) result.waypoints.col(static_cast<Eigen::Index>(k)) = corners[k];
   return finish(PathSearchStatus::kSuccess, "");

@@ -101,6 +101,110 @@ bool ToControlForm(const Form& f, ControlForm* out) {
   return true;
 }
 
+// Whether the basis is the discretization's: its forms give the grid's fixed values, every grid
+// value that shares a free value is the same form, every control reads back from the forms, every
+// equality row holds identically, and there are as many controls as the equalities leave free.
+bool BasisMatchesGrid(const TemporalDiscretization& d, const ControlBasis& basis) {
+  // The forms must agree with the grid: a fixed value is a constant equal to it.
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    const ControlForm& f = basis.grid[g];
+    if (v.var < 0 && (f.count != 0 || std::abs(f.constant - v.fixed) > 1e-12 * std::max(1.0, std::abs(v.fixed)))) {
+      return false;
+    }
+  }
+  // And they must satisfy every equality row identically (the check that the cases above are
+  // the discretization's): x_var = b_g / scale_g.
+  std::vector<const ControlForm*> of_var(static_cast<size_t>(d.num_vars), nullptr);
+  std::vector<double> var_scale(static_cast<size_t>(d.num_vars), 1.0);
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    if (v.var >= 0 && of_var[static_cast<size_t>(v.var)] == nullptr) {
+      of_var[static_cast<size_t>(v.var)] = &basis.grid[g];
+      var_scale[static_cast<size_t>(v.var)] = v.scale;
+    }
+  }
+  for (const ControlForm* f : of_var) {
+    if (f == nullptr) return false;
+  }
+  // Every grid value that shares a free value (a joint) is the same form in x: b_g / scale_g.
+  const auto same = [](const ControlForm& a, double sa, const ControlForm& b, double sb) {
+    double size = std::abs(a.constant / sa);
+    for (int t = 0; t < a.count; ++t) size = std::max(size, std::abs(a.coef[static_cast<size_t>(t)] / sa));
+    const double tolerance = 1e-12 * std::max(size, 1e-300);
+    if (std::abs(a.constant / sa - b.constant / sb) > tolerance) return false;
+    const int lo = std::min(a.count > 0 ? a.first : b.first, b.count > 0 ? b.first : a.first);
+    const int hi = std::max(a.first + a.count, b.first + b.count);
+    for (int c = lo; c < hi; ++c) {
+      const double ca = c >= a.first && c < a.first + a.count ? a.coef[static_cast<size_t>(c - a.first)] / sa : 0.0;
+      const double cb = c >= b.first && c < b.first + b.count ? b.coef[static_cast<size_t>(c - b.first)] / sb : 0.0;
+      if (std::abs(ca - cb) > tolerance) return false;
+    }
+    return true;
+  };
+  for (size_t g = 0; g < d.grid.size(); ++g) {
+    const GridValue& v = d.grid[g];
+    if (v.var < 0) continue;
+    if (!same(basis.grid[g], v.scale, *of_var[static_cast<size_t>(v.var)], var_scale[static_cast<size_t>(v.var)])) {
+      return false;
+    }
+  }
+  // Every control is read back from the forms (ControlBasis::FromGrid): the map from y to b is
+  // one to one, so no two controls describe the same profile.
+  bool ok = true;
+  for (int c = 0; c < basis.num_controls; ++c) {
+    const size_t g = static_cast<size_t>(basis.middle[static_cast<size_t>(c)]);
+    Form read;
+    const auto add = [&](size_t grid, double w) {
+      const ControlForm& f = basis.grid[grid];
+      read.constant += w * f.constant;
+      for (int t = 0; t < f.count; ++t)
+        ok = ok && read.Add(Form::Control(f.first + t, f.coef[static_cast<size_t>(t)]), w);
+    };
+    if (basis.at_knot[static_cast<size_t>(c)]) {
+      add(g, 1.0);
+    } else {
+      add(g, 2.0);
+      add(g - 1, -0.5);
+      add(g + 1, -0.5);
+    }
+    if (!ok) return false;
+    const double scale = basis.scale[static_cast<size_t>(c)];
+    if (std::abs(read.constant) > 1e-9 * scale) return false;
+    for (int t = 0; t < read.n; ++t) {
+      const auto& [control, coef] = read.terms[static_cast<size_t>(t)];
+      if (std::abs(coef - (control == c ? scale : 0.0)) > 1e-9 * scale) return false;
+    }
+  }
+  int equalities = 0;
+  for (const LinearRow& row : d.rows) {
+    if (row.lower != row.upper) continue;
+    ++equalities;
+    Form sum;
+    double size = std::abs(row.lower);
+    for (const auto& [var, coef] : row.terms) {
+      const ControlForm& f = *of_var[static_cast<size_t>(var)];
+      const double w = coef / var_scale[static_cast<size_t>(var)];
+      sum.constant += w * f.constant;
+      size = std::max(size, std::abs(w * f.constant));
+      for (int t = 0; t < f.count; ++t) {
+        Form one = Form::Control(f.first + t, w * f.coef[static_cast<size_t>(t)]);
+        size = std::max(size, std::abs(one.terms[0].second));
+        if (!sum.Add(one, 1.0)) return false;
+      }
+    }
+    const double tolerance = 1e-9 * std::max(size, 1e-300);
+    if (std::abs(sum.constant - row.lower) > tolerance) return false;
+    for (int t = 0; t < sum.n; ++t) {
+      if (std::abs(sum.terms[static_cast<size_t>(t)].second) > tolerance) return false;
+    }
+  }
+  // As many controls as the equalities leave free: with the controls independent (above) and the
+  // equality rows too (each fixes a new value along the path), the basis spans every profile of
+  // the grid. A count that differs either way leaves the problem to the general path.
+  return basis.num_controls + equalities == d.num_vars;
+}
+
 }  // namespace
 
 std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, const TemporalDiscretization& d,
@@ -260,103 +364,7 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
     }
   }
   if (!ok || basis.num_controls == 0) return std::nullopt;
-  // The forms must agree with the grid: a fixed value is a constant equal to it.
-  for (size_t g = 0; g < d.grid.size(); ++g) {
-    const GridValue& v = d.grid[g];
-    const ControlForm& f = basis.grid[g];
-    if (v.var < 0 && (f.count != 0 || std::abs(f.constant - v.fixed) > 1e-12 * std::max(1.0, std::abs(v.fixed)))) {
-      return std::nullopt;
-    }
-  }
-  // And they must satisfy every equality row identically (the check that the cases above are
-  // the discretization's): x_var = b_g / scale_g.
-  std::vector<const ControlForm*> of_var(static_cast<size_t>(d.num_vars), nullptr);
-  std::vector<double> var_scale(static_cast<size_t>(d.num_vars), 1.0);
-  for (size_t g = 0; g < d.grid.size(); ++g) {
-    const GridValue& v = d.grid[g];
-    if (v.var >= 0 && of_var[static_cast<size_t>(v.var)] == nullptr) {
-      of_var[static_cast<size_t>(v.var)] = &basis.grid[g];
-      var_scale[static_cast<size_t>(v.var)] = v.scale;
-    }
-  }
-  for (const ControlForm* f : of_var) {
-    if (f == nullptr) return std::nullopt;
-  }
-  // Every grid value that shares a free value (a joint) is the same form in x: b_g / scale_g.
-  const auto same = [](const ControlForm& a, double sa, const ControlForm& b, double sb) {
-    double size = std::abs(a.constant / sa);
-    for (int t = 0; t < a.count; ++t) size = std::max(size, std::abs(a.coef[static_cast<size_t>(t)] / sa));
-    const double tolerance = 1e-12 * std::max(size, 1e-300);
-    if (std::abs(a.constant / sa - b.constant / sb) > tolerance) return false;
-    const int lo = std::min(a.count > 0 ? a.first : b.first, b.count > 0 ? b.first : a.first);
-    const int hi = std::max(a.first + a.count, b.first + b.count);
-    for (int c = lo; c < hi; ++c) {
-      const double ca = c >= a.first && c < a.first + a.count ? a.coef[static_cast<size_t>(c - a.first)] / sa : 0.0;
-      const double cb = c >= b.first && c < b.first + b.count ? b.coef[static_cast<size_t>(c - b.first)] / sb : 0.0;
-      if (std::abs(ca - cb) > tolerance) return false;
-    }
-    return true;
-  };
-  for (size_t g = 0; g < d.grid.size(); ++g) {
-    const GridValue& v = d.grid[g];
-    if (v.var < 0) continue;
-    if (!same(basis.grid[g], v.scale, *of_var[static_cast<size_t>(v.var)], var_scale[static_cast<size_t>(v.var)])) {
-      return std::nullopt;
-    }
-  }
-  // Every control is read back from the forms (ControlBasis::FromGrid): the map from y to b is
-  // one to one, so no two controls describe the same profile.
-  for (int c = 0; c < basis.num_controls; ++c) {
-    const size_t g = static_cast<size_t>(basis.middle[static_cast<size_t>(c)]);
-    Form read;
-    const auto add = [&](size_t grid, double w) {
-      const ControlForm& f = basis.grid[grid];
-      read.constant += w * f.constant;
-      for (int t = 0; t < f.count; ++t)
-        ok = ok && read.Add(Form::Control(f.first + t, f.coef[static_cast<size_t>(t)]), w);
-    };
-    if (basis.at_knot[static_cast<size_t>(c)]) {
-      add(g, 1.0);
-    } else {
-      add(g, 2.0);
-      add(g - 1, -0.5);
-      add(g + 1, -0.5);
-    }
-    if (!ok) return std::nullopt;
-    const double scale = basis.scale[static_cast<size_t>(c)];
-    if (std::abs(read.constant) > 1e-9 * scale) return std::nullopt;
-    for (int t = 0; t < read.n; ++t) {
-      const auto& [control, coef] = read.terms[static_cast<size_t>(t)];
-      if (std::abs(coef - (control == c ? scale : 0.0)) > 1e-9 * scale) return std::nullopt;
-    }
-  }
-  int equalities = 0;
-  for (const LinearRow& row : d.rows) {
-    if (row.lower != row.upper) continue;
-    ++equalities;
-    Form sum;
-    double size = std::abs(row.lower);
-    for (const auto& [var, coef] : row.terms) {
-      const ControlForm& f = *of_var[static_cast<size_t>(var)];
-      const double w = coef / var_scale[static_cast<size_t>(var)];
-      sum.constant += w * f.constant;
-      size = std::max(size, std::abs(w * f.constant));
-      for (int t = 0; t < f.count; ++t) {
-        Form one = Form::Control(f.first + t, w * f.coef[static_cast<size_t>(t)]);
-        size = std::max(size, std::abs(one.terms[0].second));
-        if (!sum.Add(one, 1.0)) return std::nullopt;
-      }
-    }
-    const double tolerance = 1e-9 * std::max(size, 1e-300);
-    if (std::abs(sum.constant - row.lower) > tolerance) return std::nullopt;
-    for (int t = 0; t < sum.n; ++t) {
-      if (std::abs(sum.terms[static_cast<size_t>(t)].second) > tolerance) return std::nullopt;
-    }
-  }
-  // As many controls as the equalities leave free: with the controls independent (above) and the
-  // equality rows too (each fixes a new value along the path), the basis spans every profile of
-  // the grid. A count that differs either way leaves the problem to the general path.
-  if (basis.num_controls + equalities != d.num_vars) return std::nullopt;
+  if (!BasisMatchesGrid(d, basis)) return std::nullopt;
   return basis;
 }
 

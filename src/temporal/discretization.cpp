@@ -517,7 +517,7 @@ void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscreti
   const TemporalLimits& l = problem.limits;
   if (!l.HasNormLimits()) return;
   const auto check = [&](const Eigen::Vector3d& acc, const char* field) {
-    const Eigen::Vector3d thrust = acc + Eigen::Vector3d(0.0, 0.0, l.gravity);
+    const Eigen::Vector3d thrust = ThrustVector(acc, l.gravity);
     std::ostringstream ss;
     if (l.min_thrust && thrust(2) < *l.min_thrust - kConstantRowSlack * std::max(1.0, *l.min_thrust)) {
       ss << "limits.min_thrust (" << *l.min_thrust << " m/s^2) cannot hold at " << field << " (" << acc.transpose()
@@ -528,9 +528,9 @@ void CheckBoundaryAccelerations(const TemporalProblem& problem, TemporalDiscreti
     } else if (l.max_acceleration_norm && acc.norm() > *l.max_acceleration_norm * (1.0 + kConstantRowSlack)) {
       ss << "limits.max_acceleration_norm (" << *l.max_acceleration_norm << ") is exceeded at " << field << " ("
          << acc.norm() << ")";
-    } else if (l.max_tilt && std::atan2(thrust.head<2>().norm(), thrust(2)) > *l.max_tilt * (1.0 + kConstantRowSlack)) {
-      ss << "limits.max_tilt (" << *l.max_tilt << " rad) is exceeded at " << field << " (tilt "
-         << std::atan2(thrust.head<2>().norm(), thrust(2)) << " rad)";
+    } else if (l.max_tilt && Tilt(thrust) > *l.max_tilt * (1.0 + kConstantRowSlack)) {
+      ss << "limits.max_tilt (" << *l.max_tilt << " rad) is exceeded at " << field << " (tilt " << Tilt(thrust)
+         << " rad)";
     } else {
       return;
     }

@@ -70,6 +70,124 @@ bool ScaleIntoRows(const TemporalDiscretization& d, std::vector<double>* x) {
 
 }  // namespace
 
+namespace {
+
+// sqrt(b_g) as terms in the root variables c (c0: the first), a fixed value's in the constant.
+void AddRoot(const TemporalDiscretization& d, int c0, int g, conic::AffineExpr& e) {
+  const GridValue& v = d.grid[static_cast<size_t>(g)];
+  if (v.var < 0) {
+    e.constant += std::sqrt(v.fixed);
+  } else {
+    e.terms.push_back({c0 + v.var, std::sqrt(v.scale)});
+  }
+}
+
+// b_g times coef as terms in the variables x (x0: the first), a fixed value's in the constant.
+void AddB(const TemporalDiscretization& d, int x0, int g, double coef, conic::AffineExpr& e) {
+  const GridValue& v = d.grid[static_cast<size_t>(g)];
+  if (v.var < 0) {
+    e.constant += coef * v.fixed;
+  } else {
+    e.terms.push_back({x0 + v.var, coef * v.scale});
+  }
+}
+
+// The cells' time variables are held in one time unit tau, the median over cells of 1 / S_k at
+// x = 1 (a cell's time over 2 ds at its reference speed), so that d_k / tau and tau S_k are
+// both about 1; but never below 1. Measured on the long property sweep's slow minimum-jerk
+// curves (paper rows): a path that takes 2000 s (5913) had d ~ 1e3 against S ~ 1e-3 and the
+// conic solver stalled at a relative gap of 1e-6, while the same path at limits 10 times faster
+// (200 s) was solved; with tau, 7 of those 11 stalls are solved. Below 1 (fast paths: d ~ 1e-5),
+// two problems that had been solved (4395, 7356; T 0.018 and 0.010 s) ended at the iteration
+// limit, so fast paths keep d in seconds.
+double CellTimeUnit(const TemporalDiscretization& d) {
+  std::vector<double> nominals;
+  for (const Cell& cell : d.cells) {
+    conic::AffineExpr e;
+    AddRoot(d, 0, cell.first_grid, e);
+    AddRoot(d, 0, cell.first_grid + 1, e);
+    double nominal = e.constant;
+    for (const conic::Term& t : e.terms) nominal += t.coef;
+    if (nominal > 0.0 && std::isfinite(nominal)) nominals.push_back(nominal);
+  }
+  double tau = 1.0;
+  if (!nominals.empty()) {
+    std::nth_element(nominals.begin(), nominals.begin() + nominals.size() / 2, nominals.end());
+    tau = std::max(1.0, 1.0 / nominals[nominals.size() / 2]);
+  }
+  return tau;
+}
+
+// The acceleration regularization rho * sum a^2 ds as one rotated cone over the cells' a.
+void AddRegularization(const TemporalDiscretization& d, int x0, conic::ProblemBuilder* builder) {
+  const int t = builder->AddVariables(1);
+  // All cells share ds = 1/K, so rho * sum a^2 ds = rho ds t.
+  builder->SetObjectiveCoefficient(t, d.rho * d.cells.front().ds);
+  std::vector<conic::AffineExpr> rows;
+  rows.reserve(d.cells.size() + 2);
+  // (t / g, g / 2, a): the same cone as (t, 1/2, a), but with g ~ ||a|| at the optimum its first
+  // two entries are of similar size instead of t >> 1/2, which made this one cone limit nearly
+  // every step. g is half the bound acceleration_norm_scale (a is near its cap only in some cells).
+  // Measured over natural cubics and rest-to-rest quintics, m = 2..100, K = 30..100, rho = 0.01..10
+  // (36 problems): 5-12% fewer iterations in total per family than g = 1 (m = 10, K = 50,
+  // rho = 0.1: 25 -> 19); g = the full bound, or a quarter of it, did worse on some families.
+  const double g = 0.5 * d.acceleration_norm_scale;
+  rows.push_back(conic::AffineExpr{{{t, 1.0 / g}}, 0.0});
+  rows.push_back(conic::AffineExpr{{}, 0.5 * g});
+  for (const Cell& cell : d.cells) {
+    conic::AffineExpr a;
+    AddB(d, x0, cell.first_grid + 1, 0.5 / cell.ds, a);
+    AddB(d, x0, cell.first_grid, -0.5 / cell.ds, a);
+    rows.push_back(std::move(a));
+  }
+  builder->AddRotatedCone(rows);
+}
+
+// The discretization's linear rows: an equality as one row of A, others as one or two rows of G.
+void AddLinearRows(const TemporalDiscretization& d, int x0, conic::ProblemBuilder* builder) {
+  std::vector<conic::Term> terms;
+  // sign * row <= bound.
+  const auto add_less_equal = [&](const LinearRow& row, double sign, double bound) {
+    terms.clear();
+    for (const auto& t : row.terms) terms.push_back({x0 + t.first, sign * t.second});
+    builder->AddLessEqual(terms, bound);
+  };
+  for (const LinearRow& row : d.rows) {
+    if (row.lower == row.upper) {
+      // An equality (the jerk-limited mode's continuity of sddot): one row of A, not two opposite
+      // inequalities, which would leave the cone rows no interior.
+      terms.clear();
+      for (const auto& t : row.terms) terms.push_back({x0 + t.first, t.second});
+      builder->AddEquality(terms, row.upper);
+      continue;
+    }
+    if (std::isfinite(row.upper)) add_less_equal(row, 1.0, row.upper);
+    if (std::isfinite(row.lower)) add_less_equal(row, -1.0, -row.lower);
+  }
+}
+
+// The quadrotor's norm limits: (bound, norm part) in a second-order cone.
+void AddNormCones(const TemporalDiscretization& d, int x0, conic::ProblemBuilder* builder) {
+  std::vector<conic::AffineExpr> soc(4);
+  for (const ConeRow& r : d.cone_rows) {
+    for (conic::AffineExpr& e : soc) {
+      e.terms.clear();
+      e.constant = 0.0;
+    }
+    soc[0].constant = r.bound_constant;
+    for (int i = 0; i < 3; ++i) soc[static_cast<size_t>(i) + 1].constant = r.norm_constant(i);
+    for (size_t j = 0; j < r.grid.size(); ++j) {
+      if (r.bound[j] != 0.0) AddB(d, x0, r.grid[j], r.bound[j], soc[0]);
+      for (int i = 0; i < 3; ++i) {
+        if (r.norm[j](i) != 0.0) AddB(d, x0, r.grid[j], r.norm[j](i), soc[static_cast<size_t>(i) + 1]);
+      }
+    }
+    builder->AddSecondOrderCone(soc);
+  }
+}
+
+}  // namespace
+
 conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
   if (d.infeasible_reason) {
     throw std::invalid_argument("no SOCP to build: presolve proves the problem infeasible (" + *d.infeasible_reason +
@@ -110,51 +228,9 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
     }
   }
 
-  // sqrt(b_g) as an affine expression in c.
-  const auto add_root = [&](int g, conic::AffineExpr& e) {
-    const GridValue& v = d.grid[static_cast<size_t>(g)];
-    if (v.var < 0) {
-      e.constant += std::sqrt(v.fixed);
-    } else {
-      e.terms.push_back({c0 + v.var, std::sqrt(v.scale)});
-    }
-  };
-  // b_g times coef as terms in x (fixed values go to the constant).
-  const auto add_b = [&](int g, double coef, conic::AffineExpr& e) {
-    const GridValue& v = d.grid[static_cast<size_t>(g)];
-    if (v.var < 0) {
-      e.constant += coef * v.fixed;
-    } else {
-      e.terms.push_back({x0 + v.var, coef * v.scale});
-    }
-  };
-
-  // The cells' time variables are held in one time unit tau, the median over cells of 1 / S_k at
-  // x = 1 (a cell's time over 2 ds at its reference speed), so that d_k / tau and tau S_k are
-  // both about 1; but never below 1. Measured on the long property sweep's slow minimum-jerk
-  // curves (paper rows): a path that takes 2000 s (5913) had d ~ 1e3 against S ~ 1e-3 and the
-  // conic solver stalled at a relative gap of 1e-6, while the same path at limits 10 times faster
-  // (200 s) was solved; with tau, 7 of those 11 stalls are solved. Below 1 (fast paths: d ~ 1e-5),
-  // two problems that had been solved (4395, 7356; T 0.018 and 0.010 s) ended at the iteration
-  // limit, so fast paths keep d in seconds.
-  const auto root_sum = [&](const Cell& cell) {
-    conic::AffineExpr e;
-    add_root(cell.first_grid, e);
-    add_root(cell.first_grid + 1, e);
-    double nominal = e.constant;
-    for (const conic::Term& t : e.terms) nominal += t.coef;
-    return nominal;
-  };
-  std::vector<double> nominals;
-  for (const Cell& cell : d.cells) {
-    const double nominal = root_sum(cell);
-    if (nominal > 0.0 && std::isfinite(nominal)) nominals.push_back(nominal);
-  }
-  double tau = 1.0;
-  if (!nominals.empty()) {
-    std::nth_element(nominals.begin(), nominals.begin() + nominals.size() / 2, nominals.end());
-    tau = std::max(1.0, 1.0 / nominals[nominals.size() / 2]);
-  }
+  // Each cell's time 2 ds / (sqrt(b_k) + sqrt(b_k+1)) as 2 ds tau d_k in the objective, with the
+  // rotated cone 2 d_k tau (sqrt(b_k) + sqrt(b_k+1)) >= 2 (tau: CellTimeUnit).
+  const double tau = CellTimeUnit(d);
   const double sqrt2 = std::sqrt(2.0);
   for (size_t k = 0; k < d.cells.size(); ++k) {
     const Cell& cell = d.cells[k];
@@ -162,73 +238,17 @@ conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
     builder.SetObjectiveCoefficient(dk, 2.0 * cell.ds * cell.time_weight * tau);
     set_row(0, {{dk, 1.0}}, 0.0);
     set_row(1, {}, 0.0);
-    add_root(cell.first_grid, cone[1]);
-    add_root(cell.first_grid + 1, cone[1]);
+    AddRoot(d, c0, cell.first_grid, cone[1]);
+    AddRoot(d, c0, cell.first_grid + 1, cone[1]);
     for (conic::Term& t : cone[1].terms) t.coef *= tau;
     cone[1].constant *= tau;
     set_row(2, {}, sqrt2);
     builder.AddRotatedCone(cone);
   }
 
-  if (d.rho > 0.0) {
-    const int t = builder.AddVariables(1);
-    // All cells share ds = 1/K, so rho * sum a^2 ds = rho ds t.
-    builder.SetObjectiveCoefficient(t, d.rho * d.cells.front().ds);
-    std::vector<conic::AffineExpr> rows;
-    rows.reserve(d.cells.size() + 2);
-    // (t / g, g / 2, a): the same cone as (t, 1/2, a), but with g ~ ||a|| at the optimum its first
-    // two entries are of similar size instead of t >> 1/2, which made this one cone limit nearly
-    // every step. g is half the bound acceleration_norm_scale (a is near its cap only in some cells).
-    // Measured over natural cubics and rest-to-rest quintics, m = 2..100, K = 30..100, rho = 0.01..10
-    // (36 problems): 5-12% fewer iterations in total per family than g = 1 (m = 10, K = 50,
-    // rho = 0.1: 25 -> 19); g = the full bound, or a quarter of it, did worse on some families.
-    const double g = 0.5 * d.acceleration_norm_scale;
-    rows.push_back(conic::AffineExpr{{{t, 1.0 / g}}, 0.0});
-    rows.push_back(conic::AffineExpr{{}, 0.5 * g});
-    for (const Cell& cell : d.cells) {
-      conic::AffineExpr a;
-      add_b(cell.first_grid + 1, 0.5 / cell.ds, a);
-      add_b(cell.first_grid, -0.5 / cell.ds, a);
-      rows.push_back(std::move(a));
-    }
-    builder.AddRotatedCone(rows);
-  }
-
-  // sign * row <= bound.
-  const auto add_less_equal = [&](const LinearRow& row, double sign, double bound) {
-    terms.clear();
-    for (const auto& t : row.terms) terms.push_back({x0 + t.first, sign * t.second});
-    builder.AddLessEqual(terms, bound);
-  };
-  for (const LinearRow& row : d.rows) {
-    if (row.lower == row.upper) {
-      // An equality (the jerk-limited mode's continuity of sddot): one row of A, not two opposite
-      // inequalities, which would leave the cone rows no interior.
-      terms.clear();
-      for (const auto& t : row.terms) terms.push_back({x0 + t.first, t.second});
-      builder.AddEquality(terms, row.upper);
-      continue;
-    }
-    if (std::isfinite(row.upper)) add_less_equal(row, 1.0, row.upper);
-    if (std::isfinite(row.lower)) add_less_equal(row, -1.0, -row.lower);
-  }
-  // The quadrotor's norm limits: (bound, norm part) in a second-order cone.
-  std::vector<conic::AffineExpr> soc(4);
-  for (const ConeRow& r : d.cone_rows) {
-    for (conic::AffineExpr& e : soc) {
-      e.terms.clear();
-      e.constant = 0.0;
-    }
-    soc[0].constant = r.bound_constant;
-    for (int i = 0; i < 3; ++i) soc[static_cast<size_t>(i) + 1].constant = r.norm_constant(i);
-    for (size_t j = 0; j < r.grid.size(); ++j) {
-      if (r.bound[j] != 0.0) add_b(r.grid[j], r.bound[j], soc[0]);
-      for (int i = 0; i < 3; ++i) {
-        if (r.norm[j](i) != 0.0) add_b(r.grid[j], r.norm[j](i), soc[static_cast<size_t>(i) + 1]);
-      }
-    }
-    builder.AddSecondOrderCone(soc);
-  }
+  if (d.rho > 0.0) AddRegularization(d, x0, &builder);
+  AddLinearRows(d, x0, &builder);
+  AddNormCones(d, x0, &builder);
   return builder.Build();
 }
 

@@ -160,381 +160,416 @@ double ProfileTime(const TemporalDiscretization& d, const std::vector<double>& b
   return ProfileOf(d, b).total_time();
 }
 
-// The sequential convex programme on the structured path (banded_ipm.h), over d's control values:
-// d (from DiscretizeJerkLimitedTemplates) and the velocity and acceleration templates become a
-// BandedProblem once; each convex solve adds the jerk rows linearized at the previous answer (from
-// `templates`, no new discretization) and starts from that answer and its multipliers. The first
-// linearization is `linearization` (b at every half-grid value: the jerk-free certified optimum).
-// Each solve gets a working set (see the loop); an answer that violates a row left out is solved
-// again with it. False, with the reason in *why, when a solve does not end optimal: the general
-// path then decides, so statuses never depend on this one. thin_jerk: a programme whose answer is
-// only a linearization point (the coarse one) leaves out the jerk rows marked `thin`, so it bounds
-// the jerk at every other Bernstein coefficient (m = 10, K = 50: its solve over 3,800 rows instead
-// of 4,750, in as many iterations, and the fine solve unchanged).
-bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretization& d,
-                        const internal::JerkTemplates& templates, std::vector<double> linearization,
-                        const internal::BandedIpmSettings& settings, bool jerk_aware,
-                        internal::SolveWorkspace* workspace, StructuredScp* out, bool thin_jerk) {
-  Clock::time_point start = Clock::now();
-  // p: every row (in the workspace, whose memory the previous programme has touched already); a
-  // solve takes the working set `keep` of them.
-  internal::BandedProblem& p = workspace->problem;
-  if (!internal::BuildBandedProblem(d, &p, &out->why)) return false;
-  // Every regular cell's grid values as forms on its window of control values, once (by g0).
-  std::vector<internal::BandedProblem::CellMap>& cell_map = workspace->cell_maps;
-  cell_map.resize(d.grid.size());
-  std::vector<char> mapped(d.grid.size(), 0);
-  // The rows over a regular cell's three grid values, sum_j coef[j] b_{g0 + j} <= 1 (the velocity
-  // and acceleration templates, and the jerk rows of each linearization), go into p only when a
-  // solve takes them: on the benchmark's curves (m = 10, K = 50) a solve took 6,340 of 24,553
-  // velocity and acceleration rows and 978 of 9,141 jerk rows, and building every one of them was
-  // 10% of the whole solve. The others wait, tested at each answer on the grid values straight
-  // from their templates (a list of them, written and read again, cost more than it saved). Ids:
-  // d's rows first, then the cell rows, then the jerk rows (z_by_id, PredictedGain).
-  const size_t cell_rows = templates.cell_rows.size();
-  // Room for every row at once: one allocation, not a copy of ~1 MB per growth.
-  p.Reserve(p.rows.size() + cell_rows + templates.jerk_rows.size());
-  // The upper bound of each control that the essential rows and the point velocity bounds
-  // (kCapKind, which a working set takes only near their bound) give alone (with y >= 0). A control
-  // whose bound is far above its value (kLooseBound times) is held only by rows a working set
-  // may leave out (a boundary value where the tangent and the curvature vanish is held only by
-  // its cell's jerk rows), and a solve without them runs off towards infinite speed there: the
-  // working set keeps every row over such a control.
-  std::vector<double> essential_bound(static_cast<size_t>(p.n), std::numeric_limits<double>::infinity());
-  for (size_t r = 0; r < p.rows.size(); ++r) {
-    const internal::BandedRow& row = p.rows[r];
-    if (!(p.essential[r] || p.rows[r].kind == internal::kCapKind) || !(p.h[r] > 0.0)) continue;
-    bool nonnegative = true;
-    for (int t = 0; t < row.count; ++t) nonnegative = nonnegative && row.v[t] >= 0.0;
-    if (!nonnegative) continue;
-    for (int t = 0; t < row.count; ++t) {
-      double& bound = essential_bound[static_cast<size_t>(row.first + t)];
-      if (row.v[t] > 0.0) bound = std::min(bound, p.h[r] / row.v[t]);
+namespace {
+
+// One run of the structured programme (SolveStructuredScp). The banded problem p holds d's rows;
+// the rows over a regular cell's three grid values, sum_j coef[j] b_{g0 + j} <= 1 (the velocity
+// and acceleration templates, and the jerk rows of each linearization), go into p only when a
+// solve takes them: on the benchmark's curves (m = 10, K = 50) a solve took 6,340 of 24,553
+// velocity and acceleration rows and 978 of 9,141 jerk rows, and building every one of them was
+// 10% of the whole solve. The others wait, tested at each answer on the grid values straight
+// from their templates (a list of them, written and read again, cost more than it saved). Ids:
+// d's rows first, then the cell rows, then the jerk rows (z_by_id, PredictedGain).
+class StructuredProgramme {
+ public:
+  StructuredProgramme(const TemporalProblem& problem, const TemporalDiscretization& d,
+                      const internal::JerkTemplates& templates, const internal::BandedIpmSettings& settings,
+                      internal::SolveWorkspace* workspace, StructuredScp* out, bool thin_jerk)
+      : problem_(problem),
+        d_(d),
+        templates_(templates),
+        settings_(settings),
+        workspace_(*workspace),
+        out_(*out),
+        thin_jerk_(thin_jerk),
+        p_(workspace->problem),
+        cell_map_(workspace->cell_maps),
+        state_(workspace->row_state),
+        flat_(workspace->waiting_rows),
+        z_by_id_(workspace->multipliers),
+        cell_rows_(templates.cell_rows.size()) {}
+
+  // The whole programme from `linearization`; see SolveStructuredScp.
+  bool Run(std::vector<double> linearization, bool jerk_aware) {
+    linearization_ = std::move(linearization);
+    jerk_aware_ = jerk_aware;
+    if (!Prepare()) return false;
+    for (int n = 0; n < problem_.max_scp_iterations; ++n) {
+      const bool first_loose = n == 0 && loose_solves_ == 1;
+      if (!TakeFirstWorkingSet()) return false;
+      internal::BandedIpmOutcome outcome;
+      if (!SolveWithWorkingSet(first_loose, &outcome)) return false;
+      const Clock::time_point start = Clock::now();
+      std::vector<double> answer = GridValues(d_, outcome.x);
+      // What linearizing again at this answer would gain (see PredictedGain), for the stopping
+      // test below; only after a solve whose answer counts.
+      const double predicted = first_loose
+                                   ? std::numeric_limits<double>::infinity()
+                                   : PredictedGain(d_, templates_, static_rows_, z_by_id_, linearization_, answer);
+      linearization_ = std::move(answer);
+      double T = 0.0;
+      try {
+        T = ProfileTime(d_, linearization_);
+      } catch (const std::invalid_argument& e) {
+        // Values that make no profile (a knot rounded below zero): the general path decides, or
+        // the best answer so far stays.
+        out_.why = std::string("structured path: the solution makes no profile: ") + e.what();
+        return false;
+      }
+      out_.build_seconds += SecondsSince(start);
+      out_.history.push_back(T);
+      if (!first_loose && T < best_) {
+        best_ = T;
+        out_.x = std::move(outcome.x);
+      }
+      y_ = std::move(outcome.y);
+      // The stopping tests read the T of the solves whose answer counts: a loose first solve's is
+      // too rough (up to kFirstSolveTolerance).
+      if (!first_loose && Settled(T, predicted)) break;
     }
+    return !out_.x.empty();
   }
-  for (const internal::BandedRow& row : p.rows) p.bandwidth = std::max(p.bandwidth, row.count - 1);
-  const size_t d_rows = p.rows.size();
-  const size_t static_rows = d_rows + cell_rows;  // in ids
-  // Each cell row's state this round (by id - d_rows): waiting, in p, or none (a jerk row that
+
+ private:
+  using FlatRow = internal::WaitingRow;
+  // Each cell row's state in a round (by id - d_rows): waiting, in p, or none (a jerk row that
   // holds for every b >= 0).
   enum : char { kWaiting = 0, kInP = 1, kNone = 2 };
-  std::vector<char>& state = workspace->row_state;
-  state.assign(cell_rows + templates.jerk_rows.size(), kWaiting);
-  size_t waiting = 0;
-  // The constant part of b at every grid value, and its free part at some y (the rows' values).
-  std::vector<double> constant(d.grid.size()), free_b(d.grid.size());
-  for (size_t g = 0; g < d.grid.size(); ++g) constant[g] = p.grid_form[g].constant;
-  const auto set_free_b = [&](const std::vector<double>& yy) {
-    for (size_t g = 0; g < d.grid.size(); ++g) free_b[g] = p.grid_form[g].Value(yy) - constant[g];
-  };
-  // Every waiting row flat, by id - d_rows: its coefficients over its cell's three grid values and
-  // H = 1 - sum_j coef[j] constant_j, the bound of its free part (AppendRow scales a row by
-  // 1 / |H|; H <= 0 makes it essential). The cell rows' once, the jerk rows' at each linearization:
-  // the passes below read them two or three times per linearization (computed in each pass from
-  // the templates, the solve took 57.6 M instructions at m = 10, K = 50; 55.2 M this way). Kept in
-  // the workspace (see SolveWorkspace).
-  using FlatRow = internal::WaitingRow;
-  std::vector<FlatRow>& flat = workspace->waiting_rows;
-  flat.resize(cell_rows + templates.jerk_rows.size());
-  const auto set_flat = [&](size_t i, int g0, const std::array<double, 3>& coef) {
-    const size_t g = static_cast<size_t>(g0);
-    flat[i] = {coef, 1.0 - coef[0] * constant[g] - coef[1] * constant[g + 1] - coef[2] * constant[g + 2], g0};
-  };
-  for (size_t ci = 0; ci < cell_rows; ++ci) set_flat(ci, templates.cell_rows[ci].g0, templates.cell_rows[ci].coef);
-  const auto set_jerk_flat = [&](const std::vector<double>& at) {
-    JerkCoefficients jerk_coefficients(d, at);
-    for (size_t ti = 0; ti < templates.jerk_rows.size(); ++ti) {
-      const internal::JerkRowTemplate& t = templates.jerk_rows[ti];
-      set_flat(cell_rows + ti, t.g0, jerk_coefficients(t));
+
+  // p from d, the cells' maps, the waiting rows' flat forms and the first start y: false (why in
+  // out) when the structured path cannot take d.
+  bool Prepare() {
+    const Clock::time_point start = Clock::now();
+    // p: every row (in the workspace, whose memory the previous programme has touched already); a
+    // solve takes the working set `keep` of them.
+    if (!internal::BuildBandedProblem(d_, &p_, &out_.why)) return false;
+    // Every regular cell's grid values as forms on its window of control values, once (by g0).
+    cell_map_.resize(d_.grid.size());
+    mapped_.assign(d_.grid.size(), 0);
+    // Room for every row at once: one allocation, not a copy of ~1 MB per growth.
+    p_.Reserve(p_.rows.size() + cell_rows_ + templates_.jerk_rows.size());
+    // The upper bound of each control that the essential rows and the point velocity bounds
+    // (kCapKind, which a working set takes only near their bound) give alone (with y >= 0). A control
+    // whose bound is far above its value (kLooseBound times) is held only by rows a working set
+    // may leave out (a boundary value where the tangent and the curvature vanish is held only by
+    // its cell's jerk rows), and a solve without them runs off towards infinite speed there: the
+    // working set keeps every row over such a control.
+    essential_bound_.assign(static_cast<size_t>(p_.n), std::numeric_limits<double>::infinity());
+    for (size_t r = 0; r < p_.rows.size(); ++r) {
+      const internal::BandedRow& row = p_.rows[r];
+      if (!(p_.essential[r] || p_.rows[r].kind == internal::kCapKind) || !(p_.h[r] > 0.0)) continue;
+      bool nonnegative = true;
+      for (int t = 0; t < row.count; ++t) nonnegative = nonnegative && row.v[t] >= 0.0;
+      if (!nonnegative) continue;
+      for (int t = 0; t < row.count; ++t) {
+        double& bound = essential_bound_[static_cast<size_t>(row.first + t)];
+        if (row.v[t] > 0.0) bound = std::min(bound, p_.h[r] / row.v[t]);
+      }
     }
-  };
-  // A flat row's free part at the y of set_free_b.
-  const auto row_value = [&](const FlatRow& r) {
-    const size_t g = static_cast<size_t>(r.g0);
-    return r.coef[0] * free_b[g] + r.coef[1] * free_b[g + 1] + r.coef[2] * free_b[g + 2];
-  };
-  // Every cell's map, once (the first grid value g0 of each cell with rows; map_failed: MapCell
-  // refused it, and its rows are refused when taken).
-  std::vector<size_t> cells;
-  std::vector<char> map_failed(d.grid.size(), 0);
-  const auto map = [&](int g0) {
+    for (const internal::BandedRow& row : p_.rows) p_.bandwidth = std::max(p_.bandwidth, row.count - 1);
+    d_rows_ = p_.rows.size();
+    static_rows_ = d_rows_ + cell_rows_;  // in ids
+    state_.assign(cell_rows_ + templates_.jerk_rows.size(), kWaiting);
+    waiting_ = 0;
+    // The constant part of b at every grid value, and its free part at some y (the rows' values).
+    constant_.resize(d_.grid.size());
+    free_b_.resize(d_.grid.size());
+    for (size_t g = 0; g < d_.grid.size(); ++g) constant_[g] = p_.grid_form[g].constant;
+    // Every waiting row flat, by id - d_rows: its coefficients over its cell's three grid values and
+    // H = 1 - sum_j coef[j] constant_j, the bound of its free part (AppendRow scales a row by
+    // 1 / |H|; H <= 0 makes it essential). The cell rows' once, the jerk rows' at each linearization:
+    // the passes below read them two or three times per linearization (computed in each pass from
+    // the templates, the solve took 57.6 M instructions at m = 10, K = 50; 55.2 M this way). Kept in
+    // the workspace (see SolveWorkspace).
+    flat_.resize(cell_rows_ + templates_.jerk_rows.size());
+    for (size_t ci = 0; ci < cell_rows_; ++ci) {
+      SetFlat(ci, templates_.cell_rows[ci].g0, templates_.cell_rows[ci].coef);
+    }
+    // Every cell's map, once (the first grid value g0 of each cell with rows; map_failed: MapCell
+    // refused it, and its rows are refused when taken).
+    map_failed_.assign(d_.grid.size(), 0);
+    for (const int g0 : templates_.cells) Map(g0);
+    cell_marked_.assign(d_.grid.size(), 0);
+    // The first start: the control values of the guess.
+    y_.resize(static_cast<size_t>(p_.n));
+    for (int v = 0; v < p_.n; ++v) y_[static_cast<size_t>(v)] = d_.controls->FromGrid(v, linearization_);
+    out_.build_seconds += SecondsSince(start);
+    base_bandwidth_ = p_.bandwidth;
+    // The last solve's multipliers by row id (NaN: not in it).
+    z_by_id_.clear();
+    // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
+    // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
+    if (jerk_aware_) z_by_id_.assign(static_rows_ + templates_.jerk_rows.size(), std::nan(""));
+    // 1 when the first solve, from the jerk-free guess, is a loose one (its T is out->history[0]).
+    loose_solves_ = problem_.max_scp_iterations > 1 && !jerk_aware_ ? 1 : 0;
+    return true;
+  }
+
+  void SetFreeB(const std::vector<double>& yy) {
+    for (size_t g = 0; g < d_.grid.size(); ++g) free_b_[g] = p_.grid_form[g].Value(yy) - constant_[g];
+  }
+  void SetFlat(size_t i, int g0, const std::array<double, 3>& coef) {
     const size_t g = static_cast<size_t>(g0);
-    if (mapped[g]) return;
-    mapped[g] = 1;
-    cells.push_back(g);
-    map_failed[g] = !p.MapCell(g0, &cell_map[g]);
-  };
-  for (const int g0 : templates.cells) map(g0);
+    flat_[i] = {coef, 1.0 - coef[0] * constant_[g] - coef[1] * constant_[g + 1] - coef[2] * constant_[g + 2], g0};
+  }
+  void SetJerkFlat(const std::vector<double>& at) {
+    JerkCoefficients jerk_coefficients(d_, at);
+    for (size_t ti = 0; ti < templates_.jerk_rows.size(); ++ti) {
+      const internal::JerkRowTemplate& t = templates_.jerk_rows[ti];
+      SetFlat(cell_rows_ + ti, t.g0, jerk_coefficients(t));
+    }
+  }
+  // A flat row's free part at the y of SetFreeB.
+  double RowValue(const FlatRow& r) const {
+    const size_t g = static_cast<size_t>(r.g0);
+    return r.coef[0] * free_b_[g] + r.coef[1] * free_b_[g + 1] + r.coef[2] * free_b_[g + 2];
+  }
+  void Map(int g0) {
+    const size_t g = static_cast<size_t>(g0);
+    if (mapped_[g]) return;
+    mapped_[g] = 1;
+    cells_.push_back(g);
+    map_failed_[g] = !p_.MapCell(g0, &cell_map_[g]);
+  }
   // Per cell: whether its map has a term over a marked control (TouchesMarked for the cell).
-  std::vector<char> cell_marked(d.grid.size(), 0);
-  const auto mark_cells = [&](const std::vector<char>& marked) {
-    for (const size_t g : cells) {
+  void MarkCells(const std::vector<char>& marked) {
+    for (const size_t g : cells_) {
       bool touches = false;
-      if (!map_failed[g]) {
-        const internal::BandedProblem::CellMap& map = cell_map[g];
+      if (!map_failed_[g]) {
+        const internal::BandedProblem::CellMap& map = cell_map_[g];
         for (int t = 0; t < map.count && !touches; ++t) touches = marked[static_cast<size_t>(map.first + t)] != 0;
       }
-      cell_marked[g] = touches;
+      cell_marked_[g] = touches;
     }
-  };
-  // Puts the waiting rows `ids` (by id - d_rows, in order) into p (kept by the solves); false when
+  }
+  // Puts the waiting rows `which` (by id - d_rows, in order) into p (kept by the solves); false when
   // one spans too many control values or is constant and violated.
-  std::vector<char> keep;
-  std::vector<size_t> ids;
-  const auto materialize = [&](const std::vector<size_t>& which) {
+  bool Materialize(const std::vector<size_t>& which) {
     for (const size_t i : which) {
-      const FlatRow& r = flat[i];
+      const FlatRow& r = flat_[i];
       const size_t g = static_cast<size_t>(r.g0);
-      if (map_failed[g]) return false;
-      p.kind = static_cast<int>(i < cell_rows ? templates.cell_rows[i].kind : LinearRow::Kind::kJerk);
-      p.next_id = static_cast<int>(d_rows + i);
-      const size_t before = p.rows.size();
-      if (!p.AddCellRow(cell_map[g], r.coef.data(), 1.0)) return false;
-      if (p.rows.size() > before) {
-        p.bandwidth = std::max(p.bandwidth, p.rows.back().count - 1);
-        keep.push_back(1);
+      if (map_failed_[g]) return false;
+      p_.kind = static_cast<int>(i < cell_rows_ ? templates_.cell_rows[i].kind : LinearRow::Kind::kJerk);
+      p_.next_id = static_cast<int>(d_rows_ + i);
+      const size_t before = p_.rows.size();
+      if (!p_.AddCellRow(cell_map_[g], r.coef.data(), 1.0)) return false;
+      if (p_.rows.size() > before) {
+        p_.bandwidth = std::max(p_.bandwidth, p_.rows.back().count - 1);
+        keep_.push_back(1);
       }
-      state[i] = kInP;
-      --waiting;
+      state_[i] = kInP;
+      --waiting_;
     }
     return true;
-  };
+  }
   // The waiting rows (by id - d_rows) that `take` picks, in order, into p.
-  const auto take_waiting = [&](auto&& take) {
-    ids.clear();
-    for (size_t i = 0; i < flat.size(); ++i) {
-      if (state[i] == kWaiting && take(i, flat[i])) ids.push_back(i);
+  template <typename Take>
+  bool TakeWaiting(Take&& take) {
+    ids_.clear();
+    for (size_t i = 0; i < flat_.size(); ++i) {
+      if (state_[i] == kWaiting && take(i, flat_[i])) ids_.push_back(i);
     }
-    return materialize(ids);
-  };
-  const std::string too_wide = "a row over more than four control values, or a constant one violated";
-  // The first start: the control values of the guess.
-  std::vector<double> y(static_cast<size_t>(p.n));
-  for (int v = 0; v < p.n; ++v) y[static_cast<size_t>(v)] = d.controls->FromGrid(v, linearization);
-  double best = std::numeric_limits<double>::infinity();
-  out->build_seconds += SecondsSince(start);
-  const int base_bandwidth = p.bandwidth;
-  // The last solve's multipliers by row id (NaN: not in it).
-  std::vector<double>& z_by_id = workspace->multipliers;
-  z_by_id.clear();
-  std::vector<double> padded;  // y with zeros past its end, for BandedRow::PaddedValue
-  // From a jerk-limited answer (the coarse programme's) the first solve starts as a warm one, with
-  // no multipliers yet (kWarmSlack, not kGuessSlack: m = 10, K = 50, 111 M -> 103 M instructions).
-  if (jerk_aware) z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
-  // 1 when the first solve, from the jerk-free guess, is a loose one (its T is out->history[0]).
-  const size_t loose_solves = problem.max_scp_iterations > 1 && !jerk_aware ? 1 : 0;
-  for (int n = 0; n < problem.max_scp_iterations; ++n) {
-    const bool first_loose = n == 0 && loose_solves == 1;
-    start = Clock::now();
-    p.rows.resize(d_rows);
-    p.h.resize(d_rows);
-    p.essential.resize(d_rows);
-    p.id.resize(d_rows);
-    p.bandwidth = base_bandwidth;
-    std::fill(state.begin(), state.end(), kWaiting);
-    waiting = state.size();
-    // The working set: the essential rows and those near their bound at the start: kGuessFraction
-    // for the first solve, kWorkingSetFraction after it. (The general path takes
-    // kUnsettledFraction while T still moves by more than kWorkingSetSettled; from a warm start
-    // the tighter set costs fewer iterations: on the default plan, the third solve took 25,585 rows
-    // and 15 iterations with it, 9,246 and 12 without.)
-    const size_t h = out->history.size();
+    return Materialize(ids_);
+  }
+  bool TooWide() {
+    out_.why = "a row over more than four control values, or a constant one violated";
+    return false;
+  }
+
+  // A solve's first working set, from p reset to d's rows: the essential rows and those near
+  // their bound at the start (kGuessFraction for the first solve, kWorkingSetFraction after it),
+  // with the jerk rows linearized at linearization_.
+  bool TakeFirstWorkingSet() {
+    const Clock::time_point start = Clock::now();
+    p_.rows.resize(d_rows_);
+    p_.h.resize(d_rows_);
+    p_.essential.resize(d_rows_);
+    p_.id.resize(d_rows_);
+    p_.bandwidth = base_bandwidth_;
+    std::fill(state_.begin(), state_.end(), kWaiting);
+    waiting_ = state_.size();
+    // (The general path takes kUnsettledFraction while T still moves by more than
+    // kWorkingSetSettled; from a warm start the tighter set costs fewer iterations: on the default
+    // plan, the third solve took 25,585 rows and 15 iterations with it, 9,246 and 12 without.)
+    const size_t h = out_.history.size();
     const double fraction = h == 0 ? kGuessFraction : kWorkingSetFraction;
-    std::vector<char> loose(static_cast<size_t>(p.n), 0);
-    for (int c = 0; c < p.n; ++c) {
+    std::vector<char> loose(static_cast<size_t>(p_.n), 0);
+    for (int c = 0; c < p_.n; ++c) {
       loose[static_cast<size_t>(c)] =
-          essential_bound[static_cast<size_t>(c)] > kLooseBound * std::max(y[static_cast<size_t>(c)], 0.0);
+          essential_bound_[static_cast<size_t>(c)] > kLooseBound * std::max(y_[static_cast<size_t>(c)], 0.0);
     }
-    keep.assign(p.rows.size(), 0);
+    keep_.assign(p_.rows.size(), 0);
     // A first solve from the jerk-free guess, which says nothing of where the jerk rows will bind,
     // takes all of them; one from the coarse programme's jerk-limited answer only those near
     // their bound there. Template rows join as d's rows would: essential (H <= 0), near their
     // bound, or over a loose control.
-    PadForRows(y, &padded);
-    for (size_t r = 0; r < p.rows.size(); ++r) {
-      keep[r] = p.essential[r] || p.rows[r].PaddedValue(padded.data()) >= fraction * p.h[r] ||
-                TouchesMarked(p.rows[r], loose);
+    PadForRows(y_, &padded_);
+    for (size_t r = 0; r < p_.rows.size(); ++r) {
+      keep_[r] = p_.essential[r] || p_.rows[r].PaddedValue(padded_.data()) >= fraction * p_.h[r] ||
+                 TouchesMarked(p_.rows[r], loose);
     }
-    set_free_b(y);
-    set_jerk_flat(linearization);
-    mark_cells(loose);
-    const bool every_jerk_row = h == 0 && !jerk_aware;
+    SetFreeB(y_);
+    SetJerkFlat(linearization_);
+    MarkCells(loose);
+    const bool every_jerk_row = h == 0 && !jerk_aware_;
     // From a jerk-limited start (the coarse programme's answer) the first solve takes a velocity or
     // acceleration row only when it is also within kGroupFraction of the nearest row of its cell
     // and kind (relative to their bounds): a cell near a bound has every Bernstein coefficient of
     // that limit near it, and the nearest few hold the others at the answer. group_best: that
     // nearest value, by cell row (rows of one cell and kind are consecutive).
-    std::vector<double>& group_best = workspace->group_best;
-    const bool by_group = jerk_aware && h == 0;
+    std::vector<double>& group_best = workspace_.group_best;
+    const bool by_group = jerk_aware_ && h == 0;
     if (by_group) {
-      group_best.resize(cell_rows);
-      for (size_t b = 0, e = 0; b < cell_rows; b = e) {
-        const internal::GridRow& first_row = templates.cell_rows[b];
+      group_best.resize(cell_rows_);
+      for (size_t b = 0, e = 0; b < cell_rows_; b = e) {
+        const internal::GridRow& first_row = templates_.cell_rows[b];
         double best_value = -std::numeric_limits<double>::infinity();
-        for (e = b; e < cell_rows && templates.cell_rows[e].g0 == first_row.g0 &&
-                    templates.cell_rows[e].kind == first_row.kind;
+        for (e = b; e < cell_rows_ && templates_.cell_rows[e].g0 == first_row.g0 &&
+                    templates_.cell_rows[e].kind == first_row.kind;
              ++e) {
-          if (flat[e].H > 0.0)
-            best_value = std::max(best_value, row_value(flat[e]) / flat[e].H);  // (H <= 0: taken anyway)
+          if (flat_[e].H > 0.0)
+            best_value = std::max(best_value, RowValue(flat_[e]) / flat_[e].H);  // (H <= 0: taken anyway)
         }
         std::fill(group_best.begin() + static_cast<std::ptrdiff_t>(b),
                   group_best.begin() + static_cast<std::ptrdiff_t>(e), best_value);
       }
     }
-    const bool taken = take_waiting([&](size_t i, const FlatRow& r) {
+    const bool taken = TakeWaiting([&](size_t i, const FlatRow& r) {
       if (r.coef[0] <= 0.0 && r.coef[1] <= 0.0 && r.coef[2] <= 0.0) {  // holds for b >= 0
-        state[i] = kNone;
-        --waiting;
+        state_[i] = kNone;
+        --waiting_;
         return false;
       }
-      if (thin_jerk && i >= cell_rows && templates.jerk_rows[i - cell_rows].thin) {
-        state[i] = kNone;
-        --waiting;
+      if (thin_jerk_ && i >= cell_rows_ && templates_.jerk_rows[i - cell_rows_].thin) {
+        state_[i] = kNone;
+        --waiting_;
         return false;
       }
       const size_t g = static_cast<size_t>(r.g0);
-      if (map_failed[g] || !(r.H > 0.0) || (every_jerk_row && i >= cell_rows) || cell_marked[g]) return true;
-      const double value = row_value(r);
-      return value >= fraction * r.H && (!by_group || i >= cell_rows || value >= kGroupFraction * group_best[i] * r.H);
+      if (map_failed_[g] || !(r.H > 0.0) || (every_jerk_row && i >= cell_rows_) || cell_marked_[g]) return true;
+      const double value = RowValue(r);
+      return value >= fraction * r.H && (!by_group || i >= cell_rows_ || value >= kGroupFraction * group_best[i] * r.H);
     });
-    if (!taken) {
-      out->why = too_wide;
-      return false;
-    }
-    out->build_seconds += SecondsSince(start);
-    internal::BandedIpmOutcome outcome;
-    std::vector<double> values;  // the rows' values at a round's answer
+    if (!taken) return TooWide();
+    out_.build_seconds += SecondsSince(start);
+    return true;
+  }
+
+  // The solve of the working set, again with the rows its answer violates (and those near them)
+  // until it violates none; false (why in out) when a solve with every row is not optimal.
+  bool SolveWithWorkingSet(bool first_loose, internal::BandedIpmOutcome* out_outcome) {
+    internal::BandedIpmOutcome& outcome = *out_outcome;
     for (int round = 0;; ++round) {
-      start = Clock::now();
+      Clock::time_point start = Clock::now();
       // Every solve starts from the previous answer (the guess for the first) and the previous
       // multipliers (none for the first).
       // The first solve, from the jerk-free guess, only chooses the next linearization and start:
       // it stops at kFirstSolveTolerance and is never the answer.
-      internal::BandedIpmSettings solve_settings = settings;
+      internal::BandedIpmSettings solve_settings = settings_;
       if (first_loose) {
-        solve_settings.tolerance = std::max(settings.tolerance, kFirstSolveTolerance);
-        solve_settings.gap_tolerance = std::max(settings.gap_tolerance, kFirstSolveTolerance);
+        solve_settings.tolerance = std::max(settings_.tolerance, kFirstSolveTolerance);
+        solve_settings.gap_tolerance = std::max(settings_.gap_tolerance, kFirstSolveTolerance);
       }
       // The working set's rows of p, in place (copying them out was 13% of the 100 m forest's
       // build time).
-      outcome = internal::SolveBandedProblem(p, y, solve_settings, &z_by_id, &workspace->ipm, &keep);
-      out->solve_seconds += SecondsSince(start);
-      out->iterations += outcome.iterations;
-      out->rows = outcome.rows;
+      outcome = internal::SolveBandedProblem(p_, y_, solve_settings, &z_by_id_, &workspace_.ipm, &keep_);
+      out_.solve_seconds += SecondsSince(start);
+      out_.iterations += outcome.iterations;
+      out_.rows = outcome.rows;
       if (outcome.kind == internal::BandedIpmOutcome::Kind::kOptimal) {
-        z_by_id.assign(static_rows + templates.jerk_rows.size(), std::nan(""));
-        for (size_t r = 0; r < p.rows.size(); ++r) {
-          if (keep[r]) z_by_id[static_cast<size_t>(p.id[r])] = outcome.z[r];
+        z_by_id_.assign(static_rows_ + templates_.jerk_rows.size(), std::nan(""));
+        for (size_t r = 0; r < p_.rows.size(); ++r) {
+          if (keep_[r]) z_by_id_[static_cast<size_t>(p_.id[r])] = outcome.z[r];
         }
       }
       const bool all =
-          waiting == 0 && std::count(keep.begin(), keep.end(), 1) == static_cast<std::ptrdiff_t>(keep.size());
+          waiting_ == 0 && std::count(keep_.begin(), keep_.end(), 1) == static_cast<std::ptrdiff_t>(keep_.size());
       if (outcome.kind != internal::BandedIpmOutcome::Kind::kOptimal) {
         if (all) {
           // The general path decides. (Keeping an earlier answer instead, as the general path
           // does after its own failures, returned one 50% above Ipopt's T in the property sweep:
           // the structured path's first answers are linearized at the jerk-free guess.)
-          out->why = outcome.message;
+          out_.why = outcome.message;
           return false;
         }
         // The same solve with every row decides.
-        std::fill(keep.begin(), keep.end(), 1);
-        if (!take_waiting([](size_t, const FlatRow&) { return true; })) {
-          out->why = too_wide;
-          return false;
-        }
+        std::fill(keep_.begin(), keep_.end(), 1);
+        if (!TakeWaiting([](size_t, const FlatRow&) { return true; })) return TooWide();
         continue;
       }
-      // Rows left out that the answer violates (by more than the worst kept row: the solver meets
-      // its rows only to its tolerance) join the set with every row near its bound at the answer
-      // (kWorkingSetFraction) and the jerk rows near them (kViolatedReach; every row of every cell
-      // that has a violated row, as GrowWorkingSet adds, took 2.4 x more rows to the next round
-      // on the benchmark's curves); the last round takes every row.
       start = Clock::now();
-      // Every row's value at the answer, once per round.
-      values.resize(p.rows.size());
-      PadForRows(outcome.y, &padded);
-      double given = 0.0;
-      for (size_t r = 0; r < p.rows.size(); ++r) {
-        values[r] = p.rows[r].PaddedValue(padded.data());
-        if (keep[r]) given = std::max(given, values[r] - p.h[r]);
-      }
-      const auto left_out_violated = [&](size_t r) { return !keep[r] && values[r] - p.h[r] > given; };
-      // The waiting rows' values at the answer: violated by more than `given`, in p's scaled
-      // units, the controls within kViolatedReach of it are marked: every jerk row over them joins.
-      set_free_b(outcome.y);
-      std::vector<char> near(static_cast<size_t>(p.n), 0);
       bool violated = false;
-      const auto mark = [&](int first, int count) {
-        violated = true;
-        const int lo = std::max(0, first - kViolatedReach);
-        const int hi = std::min(p.n - 1, first + count - 1 + kViolatedReach);
-        for (int c = lo; c <= hi; ++c) near[static_cast<size_t>(c)] = 1;
-      };
-      for (size_t r = 0; r < p.rows.size(); ++r) {
-        if (left_out_violated(r)) mark(p.rows[r].first, p.rows[r].count);
-      }
-      for (size_t i = 0; i < flat.size(); ++i) {
-        // (H > 0: a row with H <= 0 is essential and in p.) (value - H) / H > given, undivided.
-        const FlatRow& r = flat[i];
-        if (state[i] == kWaiting && row_value(r) - r.H > given * r.H) {
-          const internal::BandedProblem::CellMap& map = cell_map[static_cast<size_t>(r.g0)];
-          mark(map.first, map.count);
-        }
-      }
-      if (violated) {
-        for (size_t r = 0; r < p.rows.size(); ++r) {
-          const bool add = round + 1 >= kMaxWorkingSetRounds || values[r] >= kWorkingSetFraction * p.h[r] ||
-                           (p.id[r] >= static_cast<int>(static_rows) && TouchesMarked(p.rows[r], near));
-          keep[r] = keep[r] || add;
-        }
-        mark_cells(near);
-        const bool last_round = round + 1 >= kMaxWorkingSetRounds;
-        const bool added = take_waiting([&](size_t i, const FlatRow& r) {
-          return last_round || row_value(r) >= kWorkingSetFraction * r.H ||
-                 (i >= cell_rows && cell_marked[static_cast<size_t>(r.g0)]);
-        });
-        if (!added) {
-          out->why = too_wide;
-          return false;
-        }
-        y = outcome.y;
-      }
-      out->build_seconds += SecondsSince(start);
-      if (!violated) break;
+      if (!GrowWorkingSet(outcome, round, &violated)) return false;
+      out_.build_seconds += SecondsSince(start);
+      if (!violated) return true;
     }
-    start = Clock::now();
-    std::vector<double> answer = GridValues(d, outcome.x);
-    // What linearizing again at this answer would gain (see PredictedGain), for the stopping
-    // test below; only after a solve whose answer counts.
-    const double predicted = first_loose ? std::numeric_limits<double>::infinity()
-                                         : PredictedGain(d, templates, static_rows, z_by_id, linearization, answer);
-    linearization = std::move(answer);
-    double T = 0.0;
-    try {
-      T = ProfileTime(d, linearization);
-    } catch (const std::invalid_argument& e) {
-      // Values that make no profile (a knot rounded below zero): the general path decides, or
-      // the best answer so far stays.
-      out->why = std::string("structured path: the solution makes no profile: ") + e.what();
-      return false;
+  }
+
+  // Rows left out that the answer violates (by more than the worst kept row: the solver meets its
+  // rows only to its tolerance) join the set with every row near its bound at the answer
+  // (kWorkingSetFraction) and the jerk rows near them (kViolatedReach; every row of every cell
+  // that has a violated row, as GrowWorkingSet adds, took 2.4 x more rows to the next round on the
+  // benchmark's curves); the last round takes every row. *violated: whether any was (then y is the
+  // answer, the next round's start). False (why in out) when a row taken cannot join p.
+  bool GrowWorkingSet(const internal::BandedIpmOutcome& outcome, int round, bool* any_violated) {
+    // Every row's value at the answer, once per round.
+    values_.resize(p_.rows.size());
+    PadForRows(outcome.y, &padded_);
+    double given = 0.0;
+    for (size_t r = 0; r < p_.rows.size(); ++r) {
+      values_[r] = p_.rows[r].PaddedValue(padded_.data());
+      if (keep_[r]) given = std::max(given, values_[r] - p_.h[r]);
     }
-    out->build_seconds += SecondsSince(start);
-    out->history.push_back(T);
-    if (!first_loose && T < best) {
-      best = T;
-      out->x = std::move(outcome.x);
+    const auto left_out_violated = [&](size_t r) { return !keep_[r] && values_[r] - p_.h[r] > given; };
+    // The waiting rows' values at the answer: violated by more than `given`, in p's scaled
+    // units, the controls within kViolatedReach of it are marked: every jerk row over them joins.
+    SetFreeB(outcome.y);
+    std::vector<char> near(static_cast<size_t>(p_.n), 0);
+    bool violated = false;
+    const auto mark = [&](int first, int count) {
+      violated = true;
+      const int lo = std::max(0, first - kViolatedReach);
+      const int hi = std::min(p_.n - 1, first + count - 1 + kViolatedReach);
+      for (int c = lo; c <= hi; ++c) near[static_cast<size_t>(c)] = 1;
+    };
+    for (size_t r = 0; r < p_.rows.size(); ++r) {
+      if (left_out_violated(r)) mark(p_.rows[r].first, p_.rows[r].count);
     }
-    y = std::move(outcome.y);
-    // The stopping tests read the T of the solves whose answer counts: a loose first solve's is
-    // too rough (up to kFirstSolveTolerance).
-    if (first_loose) continue;
-    const double* t = out->history.data() + loose_solves;
-    const size_t k = out->history.size() - loose_solves;
-    if (k >= 2 && std::abs(t[k - 2] - T) <= problem.scp_tolerance * T) break;
+    for (size_t i = 0; i < flat_.size(); ++i) {
+      // (H > 0: a row with H <= 0 is essential and in p.) (value - H) / H > given, undivided.
+      const FlatRow& r = flat_[i];
+      if (state_[i] == kWaiting && RowValue(r) - r.H > given * r.H) {
+        const internal::BandedProblem::CellMap& map = cell_map_[static_cast<size_t>(r.g0)];
+        mark(map.first, map.count);
+      }
+    }
+    if (violated) {
+      for (size_t r = 0; r < p_.rows.size(); ++r) {
+        const bool add = round + 1 >= kMaxWorkingSetRounds || values_[r] >= kWorkingSetFraction * p_.h[r] ||
+                         (p_.id[r] >= static_cast<int>(static_rows_) && TouchesMarked(p_.rows[r], near));
+        keep_[r] = keep_[r] || add;
+      }
+      MarkCells(near);
+      const bool last_round = round + 1 >= kMaxWorkingSetRounds;
+      const bool added = TakeWaiting([&](size_t i, const FlatRow& r) {
+        return last_round || RowValue(r) >= kWorkingSetFraction * r.H ||
+               (i >= cell_rows_ && cell_marked_[static_cast<size_t>(r.g0)]);
+      });
+      if (!added) return TooWide();
+      y_ = outcome.y;
+    }
+    *any_violated = violated;
+    return true;
+  }
+
+  // The stopping tests after a solve whose answer counts (T, and PredictedGain's prediction).
+  bool Settled(double T, double predicted) const {
+    const double* t = out_.history.data() + loose_solves_;
+    const size_t k = out_.history.size() - loose_solves_;
+    if (k >= 2 && std::abs(t[k - 2] - T) <= problem_.scp_tolerance * T) return true;
     // The next solve's gain predicted to first order is far below scp_tolerance: it would only
     // confirm this answer (on the default plan it saved the fourth solve, whose T moved by 2e-6).
-    if (std::abs(predicted) <= kPredictedFraction * problem.scp_tolerance * T) break;
+    if (std::abs(predicted) <= kPredictedFraction * problem_.scp_tolerance * T) return true;
     // The programme converges geometrically (on the planner's curves T moves by 2.5%, 0.46%,
     // 0.012%, then 1e-6): with the last two steps shrinking at a rate r <= kScpRate, what is left
     // to gain is at most the last step times r / (1 - r) while the rate holds; stop when that is
@@ -543,10 +578,45 @@ bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretiza
       const double last = std::abs(t[k - 1] - t[k - 2]);
       const double before = std::abs(t[k - 2] - t[k - 3]);
       const double rate = before > 0.0 ? last / before : 1.0;
-      if (rate <= kScpRate && last * rate / (1.0 - rate) <= problem.scp_tolerance * T) break;
+      if (rate <= kScpRate && last * rate / (1.0 - rate) <= problem_.scp_tolerance * T) return true;
     }
+    return false;
   }
-  return !out->x.empty();
+
+  const TemporalProblem& problem_;
+  const TemporalDiscretization& d_;
+  const internal::JerkTemplates& templates_;
+  const internal::BandedIpmSettings& settings_;
+  internal::SolveWorkspace& workspace_;
+  StructuredScp& out_;
+  const bool thin_jerk_;
+  bool jerk_aware_ = false;
+  internal::BandedProblem& p_;
+  std::vector<internal::BandedProblem::CellMap>& cell_map_;
+  std::vector<char>& state_;
+  std::vector<FlatRow>& flat_;
+  std::vector<double>& z_by_id_;
+  const size_t cell_rows_;
+  size_t d_rows_ = 0, static_rows_ = 0, waiting_ = 0, loose_solves_ = 0;
+  int base_bandwidth_ = 0;
+  std::vector<double> linearization_, y_, essential_bound_, constant_, free_b_;
+  std::vector<double> padded_;  // y with zeros past its end, for BandedRow::PaddedValue
+  std::vector<double> values_;  // the rows' values at a round's answer
+  std::vector<char> mapped_, map_failed_, cell_marked_, keep_;
+  std::vector<size_t> cells_, ids_;
+  double best_ = std::numeric_limits<double>::infinity();
+};
+
+}  // namespace
+
+// The sequential convex programme on the structured path (structured_scp.h; the steps in
+// StructuredProgramme).
+bool SolveStructuredScp(const TemporalProblem& problem, const TemporalDiscretization& d,
+                        const internal::JerkTemplates& templates, std::vector<double> linearization,
+                        const internal::BandedIpmSettings& settings, bool jerk_aware,
+                        internal::SolveWorkspace* workspace, StructuredScp* out, bool thin_jerk) {
+  StructuredProgramme programme(problem, d, templates, settings, workspace, out, thin_jerk);
+  return programme.Run(std::move(linearization), jerk_aware);
 }
 
 }  // namespace timeopt::internal

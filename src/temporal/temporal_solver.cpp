@@ -300,15 +300,9 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   // The quadrotor's limits at one sample (velocity, acceleration).
   const TemporalLimits& L = problem.limits;
   const bool norms = L.HasNormLimits();
-  double speed = 0.0, acc_norm = 0.0, thrust_max = 0.0, thrust_min = std::numeric_limits<double>::infinity(),
-         tilt = 0.0;
+  QuadrotorExtremes quadrotor;
   const auto quad = [&](const Eigen::Vector3d& vel, const Eigen::Vector3d& acc) {
-    speed = std::max(speed, vel.norm());
-    acc_norm = std::max(acc_norm, acc.norm());
-    const Eigen::Vector3d thrust = acc + Eigen::Vector3d(0.0, 0.0, L.gravity);
-    thrust_max = std::max(thrust_max, thrust.norm());
-    thrust_min = std::min(thrust_min, thrust.norm());
-    tilt = std::max(tilt, std::atan2(thrust.head<2>().norm(), thrust(2)));
+    quadrotor.Note(vel, acc, L.gravity);
   };
   std::vector<TemporalProfile::Point> states(jerk ? static_cast<size_t>(samples_per_cell) + 1 : 0);
   for (int i = 0; i < profile.num_pieces(); ++i) {
@@ -356,12 +350,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   }
   result->max_velocity_ratio = vr;
   result->max_acceleration_ratio = ar;
-  if (L.max_speed) result->max_speed_ratio = speed / *L.max_speed;
-  if (L.max_acceleration_norm) result->max_acceleration_norm_ratio = acc_norm / *L.max_acceleration_norm;
-  if (L.max_thrust) result->max_thrust_ratio = thrust_max / *L.max_thrust;
-  if (L.min_thrust)
-    result->min_thrust_ratio = thrust_min > 0.0 ? *L.min_thrust / thrust_min : std::numeric_limits<double>::infinity();
-  if (L.max_tilt) result->max_tilt_ratio = tilt / *L.max_tilt;
+  quadrotor.WriteRatios(L, result);
   result->max_jerk_ratio = jr;
 }
 
