@@ -17,6 +17,7 @@
 #include "infeasibility.h"
 #include "solver_internal.h"
 #include "timeopt/core/option_check.h"
+#include "timeopt/trajectory/trajectory.h"
 
 namespace timeopt {
 
@@ -331,19 +332,22 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
         const double s = jerk ? start + u * length : (k + u) * ds;
         const Eigen::Vector3d f1 = horner(d1, s), f2 = horner(d2, s);
         if (!jerk) {
-          const double b = std::max(0.0, b0 + (b1 - b0) * u);  // b is linear in s on the cell
-          vr = std::max(vr, (f1 * std::sqrt(b)).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
-          ar = std::max(ar, (f1 * a + f2 * b).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
-          if (norms) quad(f1 * std::sqrt(b), f1 * a + f2 * b);
+          // b is linear in s on the cell, and sddot = a constant.
+          const double sdot = std::sqrt(std::max(0.0, b0 + (b1 - b0) * u));
+          const Eigen::Vector3d velocity = ChainVelocity(f1, sdot), acceleration = ChainAcceleration(f1, f2, sdot, a);
+          vr = std::max(vr, velocity.cwiseAbs().cwiseProduct(inv_v).maxCoeff());
+          ar = std::max(ar, acceleration.cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+          if (norms) quad(velocity, acceleration);
           continue;
         }
         const TemporalProfile::Point& p = states[static_cast<size_t>(j)];
         const Eigen::Vector3d f3 = horner(d3, s);
-        const double v = p.sdot;
-        vr = std::max(vr, (f1 * v).cwiseAbs().cwiseProduct(inv_v).maxCoeff());
-        ar = std::max(ar, (f1 * p.sddot + f2 * v * v).cwiseAbs().cwiseProduct(inv_a).maxCoeff());
-        if (norms) quad(f1 * v, f1 * p.sddot + f2 * v * v);
-        const Eigen::Vector3d jerk_vector = f1 * p.sdddot + 3.0 * f2 * v * p.sddot + f3 * v * v * v;
+        const Eigen::Vector3d velocity = ChainVelocity(f1, p.sdot);
+        const Eigen::Vector3d acceleration = ChainAcceleration(f1, f2, p.sdot, p.sddot);
+        vr = std::max(vr, velocity.cwiseAbs().cwiseProduct(inv_v).maxCoeff());
+        ar = std::max(ar, acceleration.cwiseAbs().cwiseProduct(inv_a).maxCoeff());
+        if (norms) quad(velocity, acceleration);
+        const Eigen::Vector3d jerk_vector = ChainJerk(f1, f2, f3, p.sdot, p.sddot, p.sdddot);
         jr = std::max(jr, jerk_vector.cwiseAbs().cwiseProduct(inv_j).maxCoeff());
       }
     }

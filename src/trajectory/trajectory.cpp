@@ -24,12 +24,9 @@ TrajectoryState Trajectory::AtPoint(const TemporalProfile::Point& p, double t) c
   TrajectoryState x;
   x.t = t;
   x.position = d.col(0);
-  x.velocity = d.col(1) * p.sdot;
-  x.acceleration = d.col(2) * p.sdot * p.sdot + d.col(1) * p.sddot;
-  x.jerk = d.col(3) * p.sdot * p.sdot * p.sdot + 3.0 * d.col(2) * p.sdot * p.sddot;
-  // Skipped when zero (every linear cell) so that those results stay bit-for-bit what they were
-  // (adding 0 would turn a -0 into +0).
-  if (p.sdddot != 0.0) x.jerk += d.col(1) * p.sdddot;
+  x.velocity = ChainVelocity(d.col(1), p.sdot);
+  x.acceleration = ChainAcceleration(d.col(1), d.col(2), p.sdot, p.sddot);
+  x.jerk = ChainJerk(d.col(1), d.col(2), d.col(3), p.sdot, p.sddot, p.sdddot);
   return x;
 }
 

@@ -19,6 +19,23 @@ namespace timeopt {
 // setpoint rate of flight controllers' position loops.
 inline constexpr double kDefaultSampleRateHz = 100.0;
 
+// The chain rule above, the one place it is written: the trajectory's states (Trajectory::AtPoint)
+// and the temporal stage's dense limit check both take it from here, with the curve's first,
+// second and third derivatives at s and the profile's sdot, sddot, sdddot there.
+inline Eigen::Vector3d ChainVelocity(const Eigen::Vector3d& f1, double sdot) { return f1 * sdot; }
+inline Eigen::Vector3d ChainAcceleration(const Eigen::Vector3d& f1, const Eigen::Vector3d& f2, double sdot,
+                                         double sddot) {
+  return f2 * sdot * sdot + f1 * sddot;
+}
+inline Eigen::Vector3d ChainJerk(const Eigen::Vector3d& f1, const Eigen::Vector3d& f2, const Eigen::Vector3d& f3,
+                                 double sdot, double sddot, double sdddot) {
+  Eigen::Vector3d jerk = f3 * sdot * sdot * sdot + 3.0 * f2 * sdot * sddot;
+  // Skipped when zero (every linear cell) so that those results stay bit-for-bit what they were
+  // (adding 0 would turn a -0 into +0).
+  if (sdddot != 0.0) jerk += f1 * sdddot;
+  return jerk;
+}
+
 struct TrajectoryState {
   double t = 0.0;                                          // s
   Eigen::Vector3d position = Eigen::Vector3d::Zero();      // m
