@@ -1,6 +1,7 @@
 #include "timeopt/curve/interpolation.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,7 +63,9 @@ Waypoints MergeCoincidentWaypoints(const Waypoints& waypoints, double fraction, 
     throw std::invalid_argument("MergeCoincidentWaypoints: fraction must be in [0, 1), got " +
                                 std::to_string(fraction));
   }
-  const double extent = (waypoints.rowwise().maxCoeff() - waypoints.rowwise().minCoeff()).norm();
+  // (An extent beyond the doubles, waypoints near +-1e308, is taken as the largest double.)
+  double extent = (waypoints.rowwise().maxCoeff() - waypoints.rowwise().minCoeff()).stableNorm();
+  if (!std::isfinite(extent)) extent = std::numeric_limits<double>::max();
   const double tolerance = fraction * extent;
   std::vector<Eigen::Index> kept = {0};
   const Eigen::Index n = waypoints.cols();

@@ -176,6 +176,10 @@ TEST(MergeCoincidentWaypoints, DropsRepeatsAndKeepsTheEnds) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("all 4 waypoints coincide"), std::string::npos) << e.what();
   }
+  // Waypoints whose extent overflows a double (+-1e308) are two distinct waypoints, not one.
+  Waypoints huge(3, 2);
+  huge << -1e308, 1e308, 0, 0, 0, 0;
+  EXPECT_EQ(MergeCoincidentWaypoints(huge).cols(), 2);
   EXPECT_THROW(MergeCoincidentWaypoints(near, 1.0), std::invalid_argument);
   EXPECT_THROW(MergeCoincidentWaypoints(near, -1.0), std::invalid_argument);
 }
