@@ -15,6 +15,7 @@
 
 #include "timeopt/conic/cbf.h"
 #include "timeopt/core/errors.h"
+#include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/planner_io.h"
 #include "timeopt/io/temporal_io.h"
@@ -38,7 +39,7 @@ TEST(FuzzCorpus, EveryInputEndsInAResultOrADocumentedException) {
       {"problem_json", [](const fs::path& p) { ParseTemporalProblemJson(Slurp(p), "problem").Validate(); }},
       {"curve_json", [](const fs::path& p) { ParseCurveJson(Slurp(p)); }},
       {"planner_config", [](const fs::path& p) { ParsePlannerConfigJson(Slurp(p), PlannerOptions()); }},
-      {"waypoints_csv", [](const fs::path& p) { ParseWaypointsCsv(Slurp(p)); }},
+      {"waypoints_csv", [](const fs::path& p) { MergeCoincidentWaypoints(ParseWaypointsCsv(Slurp(p))); }},
       {"samples_csv", [](const fs::path& p) { ParseSamplesCsv(Slurp(p), "samples"); }},
       {"cbf",
        [](const fs::path& p) {

@@ -15,6 +15,7 @@
 
 #include "timeopt/conic/cbf.h"
 #include "timeopt/core/errors.h"
+#include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/planner_io.h"
 #include "timeopt/io/temporal_io.h"
@@ -31,7 +32,8 @@ void Run(const std::string& text) {
 #elif TIMEOPT_FUZZ_TARGET == 3
   (void)ParsePlannerConfigJson(text, PlannerOptions(), "config");
 #elif TIMEOPT_FUZZ_TARGET == 4
-  (void)ParseWaypointsCsv(text);
+  // As `curve` and `waypoints` read them: coincident waypoints merged.
+  (void)MergeCoincidentWaypoints(ParseWaypointsCsv(text));
 #elif TIMEOPT_FUZZ_TARGET == 5
   (void)ParseSamplesCsv(text, "samples");
 #elif TIMEOPT_FUZZ_TARGET == 6
