@@ -240,7 +240,8 @@ inline TemporalProfile ProfileFromState(const py::tuple& state) {
 // ---- temporal results ----
 inline py::tuple ResultState(const TemporalResult& t) {
   py::list joints;
-  for (const JointInfo& j : t.joints) joints.append(py::make_tuple(j.joint, ToString(j.type), j.speed_ratio, j.angle));
+  for (const JointInfo& j : t.joints)
+    joints.append(py::make_tuple(j.joint, ToString(j.type), j.speed_ratio, j.angle, j.reason));
   py::object infeasibility = py::none(), relaxation = py::none();
   if (t.infeasibility) {
     infeasibility = py::make_tuple(t.infeasibility->cause, t.infeasibility->where, t.infeasibility->detail);
@@ -282,6 +283,7 @@ inline TemporalResult ResultFromState(const py::tuple& state) {
     }
     info.speed_ratio = j[2].cast<double>();
     info.angle = j[3].cast<double>();
+    if (j.size() > 4) info.reason = j[4].cast<std::string>();
     t.joints.push_back(info);
   }
   t.max_velocity_ratio = r.Get<double>();

@@ -128,8 +128,10 @@ std::string TemporalResultToJson(const TemporalResult& r, int indent) {
   }
   json joints = json::array();
   for (const JointInfo& ji : r.joints) {
-    joints.push_back(
-        {{"joint", ji.joint}, {"type", ToString(ji.type)}, {"speed_ratio", ji.speed_ratio}, {"angle", ji.angle}});
+    json joint = {
+        {"joint", ji.joint}, {"type", ToString(ji.type)}, {"speed_ratio", ji.speed_ratio}, {"angle", ji.angle}};
+    if (!ji.reason.empty()) joint["reason"] = ji.reason;
+    joints.push_back(std::move(joint));
   }
   j["joints"] = joints;
   return j.dump(indent) + "\n";

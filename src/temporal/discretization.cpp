@@ -191,11 +191,21 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
       j.type = JointType::kStop;
       j.speed_ratio = 0.0;
       j.angle = 0.0;
+      std::ostringstream why;
+      why << "the tangent vanishes at the "
+          << (n0 <= problem.zero_tangent_tolerance ? "end of piece " : "start of piece ")
+          << (n0 <= problem.zero_tangent_tolerance ? i : i + 1) << " (" << std::min(n0, n1)
+          << " m per unit s, at most zero_tangent_tolerance " << problem.zero_tangent_tolerance << ")";
+      j.reason = why.str();
     } else {
       j.angle = Angle(t0, t1);
       j.speed_ratio = n0 / n1;
       if (j.angle > problem.parallel_tolerance) {
         j.type = JointType::kStop;
+        std::ostringstream why;
+        why << "the tangents turn by " << j.angle << " rad (above parallel_tolerance " << problem.parallel_tolerance
+            << ")";
+        j.reason = why.str();
       } else if (std::abs(j.speed_ratio - 1.0) <= 1e-12) {
         // Equal up to rounding: eq. 43 exactly.
         j.type = JointType::kC1;

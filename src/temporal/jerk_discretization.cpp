@@ -180,7 +180,10 @@ void StopWhereCurvatureJumps(const TemporalProblem& p, TemporalDiscretization* d
     const Eigen::Vector3d unit = f1b.normalized();
     const Eigen::Vector3d across = diff - diff.dot(unit) * unit;
     const double scale = std::max({f2a.norm(), r2 * f2b.norm(), f1b.squaredNorm() * 1e-6});
-    if (across.norm() > kNormalTolerance * scale) j.type = JointType::kStop;
+    if (across.norm() > kNormalTolerance * scale) {
+      j.type = JointType::kStop;
+      j.reason = "the curvature jumps (the acceleration across the path could not stay continuous at speed)";
+    }
   }
 }
 

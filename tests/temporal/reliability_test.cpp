@@ -181,6 +181,34 @@ TEST(Reliability, ALineInPiecesOfAMetreAMillimetreAndAMetreIsTheStraightLine) {
   }
 }
 
+TEST(Reliability, AStopSaysWhyTheVehicleStopsThere) {
+  // A 2 m line with a middle piece of 1e-9 m: its tangent (exactly 1e-9 m per unit s) counts as
+  // vanishing (zero_tangent_tolerance), so both of its joints are stops, and T is three rest-to-rest
+  // pieces without a jerk limit, 2 sqrt(L / 3) s each at a = 3 (v = 4 is not reached). Each stop
+  // names its cause. Still open: the straight line would take 2 sqrt(2 / 3) s, and a middle piece
+  // just above the tolerance (1 + 1e-9 - 1 = 1.00000008e-9 m from its end points) is a G1 joint
+  // with a speed ratio of 1e9, which the SOCP backend does not answer (numerical_error; ratios up
+  // to 1e6, a 1 um piece, are answered).
+  TemporalProblem p;
+  PolynomialPiece::Coefficients tiny = PolynomialPiece::Coefficients::Zero(3, 2);
+  tiny(0, 0) = 1.0;
+  tiny(0, 1) = 1e-9;
+  p.curve = PiecewiseCurve(
+      {test_support::LinearPiece(Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 0, 0)), PolynomialPiece(tiny),
+       test_support::LinearPiece(Eigen::Vector3d(1 + 1e-9, 0, 0), Eigen::Vector3d(2 + 1e-9, 0, 0))});
+  p.limits.max_velocity.setConstant(4.0);
+  p.limits.max_acceleration.setConstant(3.0);
+  p.cells_per_piece = 50;  // the paper's rows, exact on a line whose switch (s = 1/2) is a grid point
+  const TemporalResult r = MakeSocpTemporalSolver()->Solve(p);
+  ASSERT_EQ(r.status, TemporalStatus::kOptimal) << r.message;
+  // Rest to rest over each metre, and over the 1e-9 m piece between its two stops (36.5 us).
+  EXPECT_NEAR(r.total_time, 4.0 * std::sqrt(1.0 / 3.0) + 2.0 * std::sqrt(1e-9 / 3.0), 1e-7);
+  ASSERT_EQ(r.joints.size(), 2u);
+  EXPECT_EQ(r.joints[0].type, JointType::kStop);
+  EXPECT_THAT(r.joints[0].reason, HasSubstr("the tangent vanishes at the start of piece 1"));
+  EXPECT_THAT(r.joints[1].reason, HasSubstr("the tangent vanishes at the end of piece 1"));
+}
+
 TEST(Reliability, JerkLimitedInfeasibilityNamesItsCause) {
   // The same causes as without a jerk limit (which only makes a problem harder): a start above the
   // velocity limit, a start too fast to stop in 1 m (v 4, a 3: at most sqrt(2 a L) = 2.45 m/s

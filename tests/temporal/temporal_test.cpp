@@ -90,7 +90,11 @@ TEST_P(BothBackends, PolylineStopsAtCorners) {
   const double expected = RestToRestTime(10, 2, 1) + RestToRestTime(1, 2, 1) + RestToRestTime(6, 2, 1);
   EXPECT_NEAR(r.total_time, expected, expected * 1e-7);
   ASSERT_EQ(r.joints.size(), 2u);
-  for (const JointInfo& j : r.joints) EXPECT_EQ(j.type, JointType::kStop);
+  for (const JointInfo& j : r.joints) {
+    EXPECT_EQ(j.type, JointType::kStop);
+    // The corners turn by a right angle: the reason says so (pi / 2 to the 6 digits printed).
+    EXPECT_THAT(j.reason, ::testing::HasSubstr("the tangents turn by 1.5708 rad")) << j.joint;
+  }
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR(r.piece_durations[i], RestToRestTime(lengths[i], 2, 1), 1e-6);
   }
