@@ -49,7 +49,7 @@ struct JointInfo {
   double speed_ratio = 1.0;  // |f'_i(1)| / |f'_{i+1}(0)| (1 for C1; 0 for a vanishing tangent)
   double angle = 0.0;        // angle between the tangents, radians
   // For a stop, why the vehicle must stop there (empty otherwise): "the tangent vanishes" (on the
-  // side named, below TemporalProblem::zero_tangent_tolerance: a piece of almost no length, or a
+  // side named, at most TemporalProblem::zero_tangent_tolerance: a piece of almost no length, or a
   // cusp), "the tangents turn" (a kink: angle above parallel_tolerance), or "the curvature jumps"
   // (jerk-limited: the acceleration across the path could not stay continuous at speed).
   std::string reason;
