@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "timeopt/conic/solver.h"
+#include "timeopt/curve/interpolation.h"
+#include "timeopt/io/curve_io.h"
 #include "timeopt/io/sim_io.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/sim/quadrotor_sim.h"
@@ -27,6 +29,16 @@ constexpr int kExitOk = 0;
 constexpr int kExitFailure = 1;
 constexpr int kExitInvalidInput = 2;
 constexpr int kExitInfeasible = 3;
+
+// A waypoints CSV as `curve` and `waypoints` fit it: waypoints that coincide with the one before
+// dropped (MergeCoincidentWaypoints); *merged gets how many.
+inline Waypoints ReadDistinctWaypoints(const std::string& path, int* merged) {
+  return MergeCoincidentWaypoints(ReadWaypointsCsv(path), kCoincidentWaypointFraction, merged);
+}
+// What the text output says after a waypoint count when some were dropped ("" when none was).
+inline std::string DroppedWaypointsNote(int merged) {
+  return merged > 0 ? " (" + std::to_string(merged) + " more dropped: each coincided with the one before)" : "";
+}
 
 // Said next to a flight whose limits were exceeded, so that a reader of the summary knows what it
 // means: without a jerk limit the plan satisfies its limits but the jerk-input vehicle cannot follow

@@ -21,8 +21,7 @@ struct CurveArgs {
 
 int RunCurve(const CurveArgs& args) {
   int merged = 0;
-  const Waypoints waypoints =
-      MergeCoincidentWaypoints(ReadWaypointsCsv(args.waypoints), kCoincidentWaypointFraction, &merged);
+  const Waypoints waypoints = ReadDistinctWaypoints(args.waypoints, &merged);
   const PiecewiseCurve curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   WriteCurveJson(curve, args.output);
 
@@ -36,8 +35,7 @@ int RunCurve(const CurveArgs& args) {
     std::cout << j.dump(2) << "\n";
     return kExitOk;
   }
-  std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints"
-            << (merged > 0 ? " (" + std::to_string(merged) + " more dropped: each coincided with the one before)" : "")
+  std::cout << "curve: " << args.kind << " through " << waypoints.cols() << " waypoints" << DroppedWaypointsNote(merged)
             << "\n"
             << "pieces: " << curve.num_pieces() << "\n"
             << std::setprecision(9) << "length: " << length << " m\n"

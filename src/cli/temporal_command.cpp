@@ -161,8 +161,7 @@ std::string FormatNumber(double value) {
 
 int RunWaypoints(const WaypointsArgs& args) {
   int merged = 0;
-  const Waypoints waypoints =
-      MergeCoincidentWaypoints(ReadWaypointsCsv(args.waypoints), kCoincidentWaypointFraction, &merged);
+  const Waypoints waypoints = ReadDistinctWaypoints(args.waypoints, &merged);
   TemporalProblem problem;
   problem.curve = args.kind == "cubic" ? NaturalCubicSpline(waypoints) : MinimumJerkSpline(waypoints);
   constexpr double kNone = std::numeric_limits<double>::infinity();
@@ -241,9 +240,8 @@ int RunWaypoints(const WaypointsArgs& args) {
     return kExitOk;
   }
   if (args.quiet) return kExitOk;
-  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols()
-            << (merged > 0 ? " (" + std::to_string(merged) + " more dropped: each coincided with the one before)" : "")
-            << " (" << args.kind << " curve, " << problem.curve.num_pieces() << " pieces, length "
+  std::cout << std::setprecision(6) << "waypoints: " << waypoints.cols() << DroppedWaypointsNote(merged) << " ("
+            << args.kind << " curve, " << problem.curve.num_pieces() << " pieces, length "
             << problem.curve.ArcLength(1e-9) << " m)\n"
             << "limits: " << LimitsLine(problem.limits)
             << (args.max_jerk > 0.0 ? "max_jerk " + FormatNumber(args.max_jerk) + " m/s^3, " : std::string()) << "K "
