@@ -249,7 +249,7 @@ int ExportCbf(const std::string& dir) {
   for (const double rho : {0.0, 0.1, 1.0}) {
     const std::string path = dir + "/temporal_m10_K50_rho" + (rho == 0.0 ? "0" : rho == 0.1 ? "0.1" : "1") + ".cbf";
     std::ofstream out(path);
-    if (out) conic::WriteCbf(BuildTemporalSocp(Discretize(MakeProblem(10, 50, ConstraintMode::kPaper, rho))), out);
+    if (out) conic::WriteCbf(BuildTemporalSocp(MakeProblem(10, 50, ConstraintMode::kPaper, rho)), out);
     if (!out) {
       std::cerr << "temporal_benchmark: cannot write " << path << "\n";
       return 1;

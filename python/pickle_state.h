@@ -23,7 +23,7 @@
 #include "timeopt/core/enum_strings.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/spatial/spatial_optimizer.h"
-#include "timeopt/temporal/discretization.h"
+#include "timeopt/temporal/joints.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/temporal/temporal_result.h"
 #include "timeopt/trajectory/temporal_profile.h"

@@ -29,7 +29,7 @@
 #include "timeopt/viz/plan_plot.h"
 #include "timeopt/planner/planner.h"
 #include "timeopt/spatial/spatial_optimizer.h"
-#include "timeopt/temporal/discretization.h"
+#include "timeopt/temporal/joints.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/temporal/temporal_result.h"
 #include "timeopt/temporal/temporal_socp.h"

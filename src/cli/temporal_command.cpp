@@ -59,7 +59,7 @@ struct TemporalArgs {
 void ExportSocp(const TemporalProblem& problem, const std::string& path) {
   conic::Problem socp;
   try {
-    socp = BuildTemporalSocp(Discretize(problem));
+    socp = BuildTemporalSocp(problem);
   } catch (const std::invalid_argument& e) {
     std::cerr << "timeopt: --export-cbf: nothing written: " << e.what() << "\n";
     return;

@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "discretization_internal.h"
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 
 namespace timeopt::internal {
 

@@ -1,4 +1,4 @@
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 
 #include <algorithm>
 #include <cmath>

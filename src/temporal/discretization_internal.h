@@ -19,7 +19,7 @@
 
 #include <Eigen/Core>
 
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 
 namespace timeopt::internal {
 

@@ -30,7 +30,7 @@
 #include <Eigen/Core>
 #include <IpTNLP.hpp>
 
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 
 namespace timeopt {
 

@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 
 namespace timeopt::internal {
 

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "banded_ipm.h"
+#include "discretization.h"
 #include "timeopt/conic/problem_builder.h"
 #include "timeopt/conic/solver.h"
 #include "timeopt/temporal/temporal_socp.h"
@@ -188,7 +189,7 @@ void AddNormCones(const TemporalDiscretization& d, int x0, conic::ProblemBuilder
 
 }  // namespace
 
-conic::Problem BuildTemporalSocp(const TemporalDiscretization& d) {
+conic::Problem BuildDiscretizedSocp(const TemporalDiscretization& d) {
   if (d.infeasible_reason) {
     throw std::invalid_argument("no SOCP to build: presolve proves the problem infeasible (" + *d.infeasible_reason +
                                 ")");
@@ -316,7 +317,7 @@ class SocpTemporalSolver final : public TemporalSolver {
       banded_iterations = b.iterations;
     }
     const auto start = Clock::now();
-    const conic::Problem socp = BuildTemporalSocp(d);
+    const conic::Problem socp = BuildDiscretizedSocp(d);
     result->build_time_seconds += Seconds(start, Clock::now());
 
     const conic::Result r = (d.jerk_limited ? jerk_solver_ : solver_).Solve(socp);
@@ -364,5 +365,7 @@ std::unique_ptr<TemporalSolver> MakeSocpTemporalSolver(const SocpTemporalOptions
   if (!options.IsValid(&error)) throw std::invalid_argument("SocpTemporalOptions." + error);
   return std::make_unique<SocpTemporalSolver>(options);
 }
+
+conic::Problem BuildTemporalSocp(const TemporalProblem& problem) { return BuildDiscretizedSocp(Discretize(problem)); }
 
 }  // namespace timeopt

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "timeopt/temporal/discretization.h"
+#include "discretization.h"
 #include "timeopt/temporal/temporal_result.h"
 
 namespace timeopt::internal {

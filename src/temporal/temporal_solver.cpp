@@ -23,6 +23,7 @@ namespace timeopt {
 
 TemporalSolver::TemporalSolver() = default;
 TemporalSolver::~TemporalSolver() = default;
+JerkRows TemporalSolver::jerk_rows() const { return JerkRows::kLinearized; }
 
 const char* ToString(TemporalStatus status) {
   switch (status) {

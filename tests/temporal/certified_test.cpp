@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "timeopt/curve/interpolation.h"
-#include "timeopt/temporal/discretization.h"
+#include "temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 #include "../common/fixtures.h"

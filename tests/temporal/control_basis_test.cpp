@@ -16,7 +16,7 @@
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/curve/piecewise_curve.h"
 #include "timeopt/curve/polynomial_piece.h"
-#include "timeopt/temporal/discretization.h"
+#include "temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 namespace timeopt {

@@ -16,7 +16,7 @@
 
 #include "../../src/temporal/ipopt_nlp.h"
 #include "timeopt/curve/interpolation.h"
-#include "timeopt/temporal/discretization.h"
+#include "temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 
 #include "../common/fixtures.h"

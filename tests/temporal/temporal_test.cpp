@@ -15,7 +15,7 @@
 #include "timeopt/curve/interpolation.h"
 #include "timeopt/io/curve_io.h"
 #include "timeopt/io/temporal_io.h"
-#include "timeopt/temporal/discretization.h"
+#include "temporal/discretization.h"
 #include "timeopt/temporal/temporal_solver.h"
 #include "timeopt/trajectory/trajectory.h"
 

@@ -7,7 +7,7 @@
 // With b(s) = sdot^2 and a(s) = sddot, velocity and acceleration along the curve are
 //   v(s) = f'(s) sqrt(b(s)),   acc(s) = f'(s) a(s) + f''(s) b(s),   b'(s) = 2 a(s),
 // and the traversal time is T = integral ds / sqrt(b(s)). The discretization (K cells per piece,
-// b at grid points, a constant per cell) is described in discretization.h and in docs/temporal.md.
+// b at grid points, a constant per cell) is described in docs/temporal.md.
 // SI units: metres, seconds.
 
 #include <array>

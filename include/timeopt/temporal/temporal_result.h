@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "timeopt/temporal/discretization.h"
+#include "timeopt/temporal/joints.h"
 #include "timeopt/trajectory/temporal_profile.h"
 
 namespace timeopt {

@@ -1,9 +1,10 @@
 #pragma once
 
 // Solvers of the temporal problem: the paper's SOCP with our own conic solver, and the same
-// problem as an Ipopt NLP for comparison. Both solve the TemporalDiscretization built from the
-// problem, so they agree up to their tolerances. Their statuses and results are in
-// temporal_result.h; the SOCP itself, for other conic solvers, in temporal_socp.h.
+// problem as an Ipopt NLP for comparison. Both solve the same discretization of the problem
+// (private to the library: src/temporal/discretization.h), so they agree up to their tolerances.
+// Their statuses and results are in temporal_result.h; the SOCP itself, for other conic solvers,
+// in temporal_socp.h.
 
 #include <cstdint>
 #include <memory>
@@ -11,11 +12,14 @@
 #include <string>
 #include <vector>
 
-#include "timeopt/temporal/discretization.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/temporal/temporal_result.h"
 
 namespace timeopt {
+// The discretized problem and how it writes the jerk limit: private to the temporal module, they
+// reach a backend through SolveDiscretized below.
+struct TemporalDiscretization;
+enum class JerkRows;
 namespace internal {
 struct SolveWorkspace;
 class JerkLimitedSolve;
@@ -50,7 +54,7 @@ class TemporalSolver {
   virtual void SolveDiscretized(const TemporalDiscretization& d, TemporalResult* result, std::vector<double>* x) = 0;
   // How the backend takes the jerk limit (limits.max_jerk set): kLinearized, the sequential convex
   // programme (the SOCP backend); kExact, one solve with the non-convex cubic rows (Ipopt).
-  virtual JerkRows jerk_rows() const { return JerkRows::kLinearized; }
+  virtual JerkRows jerk_rows() const;
   // CPU seconds for retrying a failed jerk-limited solve with the Ipopt backend's exact rows (0:
   // no retry).
   virtual double jerk_ipopt_fallback_seconds() const { return 0.0; }

@@ -1,7 +1,9 @@
 #pragma once
 
 // The discretized temporal problem shared by every backend, so that the SOCP and the NLP solve
-// exactly the same problem.
+// exactly the same problem. Private to the temporal module: the public interface is the problem
+// (timeopt/temporal/temporal_problem.h), the result (temporal_result.h) and the SOCP for other
+// conic solvers (temporal_socp.h).
 //
 // Grid: piece i has grid points s_k = k ds, k = 0..K, ds = 1/K, and cells [s_k, s_{k+1}].
 // Unknown: b at every grid point (b = sdot^2). Within a cell b is linear in s and a = sddot is
@@ -22,38 +24,12 @@
 #include <string>
 #include <vector>
 
+#include "timeopt/conic/problem.h"
+#include "timeopt/temporal/joints.h"
 #include "timeopt/temporal/temporal_problem.h"
 #include "timeopt/trajectory/temporal_profile.h"
 
 namespace timeopt {
-
-enum class JointType {
-  kC1,    // tangents equal: b continuous (eq. 43)
-  kG1,    // tangents parallel, lengths differ: b scaled by the squared length ratio (eq. 42)
-  kStop,  // tangents turn or vanish: the vehicle stops, b = 0 on both sides
-};
-
-// Every enumerator, in declaration order (for FromString, and for listing the choices).
-inline constexpr std::array<JointType, 3> kJointTypes = {
-    JointType::kC1,
-    JointType::kG1,
-    JointType::kStop,
-};
-const char* ToString(JointType type);
-// The enumerator named `text` (as ToString writes it) into *type; false when none is.
-bool FromString(const std::string& text, JointType* type);
-
-struct JointInfo {
-  int joint = 0;  // between piece `joint` and `joint + 1`
-  JointType type = JointType::kC1;
-  double speed_ratio = 1.0;  // |f'_i(1)| / |f'_{i+1}(0)| (1 for C1; 0 for a vanishing tangent)
-  double angle = 0.0;        // angle between the tangents, radians
-  // For a stop, why the vehicle must stop there (empty otherwise): "the tangent vanishes" (on the
-  // side named, at most TemporalProblem::zero_tangent_tolerance: a piece of almost no length, or a
-  // cusp), "the tangents turn" (a kink: angle above parallel_tolerance), or "the curvature jumps"
-  // (jerk-limited: the acceleration across the path could not stay continuous at speed).
-  std::string reason;
-};
 
 // One grid value b_g: fixed, or scale * x[var].
 struct GridValue {
@@ -217,5 +193,10 @@ enum class JerkRows {
 // the true jerk limit. Rest cells' jerk bounds are exact and linear in every mode.
 TemporalDiscretization DiscretizeJerkLimited(const TemporalProblem& problem, JerkRows jerk_rows,
                                              const std::vector<double>* linearization = nullptr);
+
+// The conic program of the SOCP backend over `d` (BuildTemporalSocp of the problem, public, is this
+// of its Discretize; socp_backend.cpp). Throws std::invalid_argument when presolve already proved d
+// infeasible or every grid value is fixed.
+conic::Problem BuildDiscretizedSocp(const TemporalDiscretization& d);
 
 }  // namespace timeopt
