@@ -105,7 +105,7 @@ PlannerOptions OptionsFor(SpatialFormulation f) {
   options.spatial.formulation = f;
   // The same budget for both: the iteration limit (100). No wall-clock limit, so that a run is
   // deterministic whatever the machine's load (the forest plans converge in 10-40 iterations).
-  options.spatial.max_solver_time_in_seconds = 10.0;
+  options.spatial.max_solver_time_seconds = 10.0;
   return options;
 }
 

@@ -148,11 +148,12 @@ int main(int argc, char** argv) {
     double baseline = 0.0;
     for (double d : r.plan.spatial.durations) baseline += d;
     csv << r.radius << "," << r.formulation << "," << r.map_id << "," << r.trial << "," << ToString(r.plan.status)
-        << "," << r.plan.spatial_attempts << "," << r.plan.curve.num_pieces() << "," << r.plan.times.search_ms << ","
-        << r.plan.times.spatial_ms << "," << r.plan.times.check_ms << "," << r.plan.times.temporal_ms << ","
-        << r.plan.times.total_ms << "," << r.plan.spatial.iterations.size() << "," << r.plan.path_length << ","
-        << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0) << "," << baseline
-        << "," << r.plan.min_interior_speed << "," << r.plan.min_curvature_radius << "\n";
+        << "," << r.plan.spatial_attempts << "," << r.plan.curve.num_pieces() << ","
+        << 1e3 * r.plan.times.search_seconds << "," << 1e3 * r.plan.times.spatial_seconds << ","
+        << 1e3 * r.plan.times.check_seconds << "," << 1e3 * r.plan.times.temporal_seconds << ","
+        << 1e3 * r.plan.times.total_seconds << "," << r.plan.spatial.iterations.size() << "," << r.plan.path_length
+        << "," << r.plan.min_clearance << "," << (r.plan.is_success() ? r.plan.temporal.total_time : 0.0) << ","
+        << baseline << "," << r.plan.min_interior_speed << "," << r.plan.min_curvature_radius << "\n";
   }
 
   // Convergence records (paper Fig. 4): the last spatial attempt's iterations, cost relative to
@@ -275,11 +276,11 @@ int main(int argc, char** argv) {
           continue;
         }
         ++ok;
-        search.push_back(r.plan.times.search_ms);
-        spatial.push_back(r.plan.times.spatial_ms);
-        check.push_back(r.plan.times.check_ms);
-        temporal.push_back(r.plan.times.temporal_ms);
-        total.push_back(r.plan.times.total_ms);
+        search.push_back(1e3 * r.plan.times.search_seconds);
+        spatial.push_back(1e3 * r.plan.times.spatial_seconds);
+        check.push_back(1e3 * r.plan.times.check_seconds);
+        temporal.push_back(1e3 * r.plan.times.temporal_seconds);
+        total.push_back(1e3 * r.plan.times.total_seconds);
         duration.push_back(r.plan.temporal.total_time);
       }
       std::ostringstream fail;

@@ -91,11 +91,11 @@ conic::Solver::Options ConicOptionsFrom(const py::kwargs& kwargs) {
       o.feasibility_tolerance = o.absolute_gap_tolerance = o.relative_gap_tolerance = o.infeasibility_tolerance = t;
     } else if (key == "max_iterations") {
       o.max_iterations = item.second.cast<int>();
-    } else if (key == "max_solve_time") {
-      o.max_solve_time_in_seconds = item.second.cast<double>();
+    } else if (key == "max_solve_time_seconds") {
+      o.max_solve_time_seconds = item.second.cast<double>();
     } else {
       throw py::type_error("conic.solve: unknown keyword '" + key +
-                           "' (expected tolerance, max_iterations, max_solve_time)");
+                           "' (expected tolerance, max_iterations, max_solve_time_seconds)");
     }
   }
   std::string error;
@@ -123,7 +123,7 @@ void BindConic(py::module_& m) {
       .def_readonly("primal_objective", &conic::Result::primal_objective)
       .def_readonly("dual_objective", &conic::Result::dual_objective)
       .def_readonly("iterations", &conic::Result::iterations)
-      .def_readonly("solve_time", &conic::Result::solve_time_seconds)
+      .def_readonly("solve_time_seconds", &conic::Result::solve_time_seconds)
       .def_readonly("reduced_accuracy", &conic::Result::reduced_accuracy);
   conic_module.def(
       "solve",
@@ -138,7 +138,7 @@ void BindConic(py::module_& m) {
       py::arg("cones") = py::dict(),
       "min c'x s.t. A x = b, G x + s = h, s in K, with K = {'l': orthant rows, 'q': [second-order cone sizes],\n"
       "'r': [rotated cone sizes]} in that row order. G and A: scipy.sparse or dense. Keywords: tolerance,\n"
-      "max_iterations, max_solve_time. Releases the GIL.");
+      "max_iterations, max_solve_time_seconds. Releases the GIL.");
   conic_module.def(
       "read_cbf",
       [](const std::string& path) {

@@ -73,7 +73,7 @@ void BindMaps(py::module_& m) {
   // ---- exports ----
   m.def(
       "export",
-      [](const Trajectory& trajectory, const std::string& format, const std::string& path, double rate,
+      [](const Trajectory& trajectory, const std::string& format, const std::string& path, double rate_hz,
          const std::string& yaw, double max_yaw_rate, const OccupancyMap* map, double voxel_radius,
          double max_position_error, double max_velocity_error, double max_acceleration_error) {
         ExportFormat kind = ExportFormat::kCsv;
@@ -81,7 +81,7 @@ void BindMaps(py::module_& m) {
           throw py::value_error("export: format must be " + EnumChoices(kExportFormats) + ", got '" + format + "'");
         }
         ExportOptions options;
-        options.rate_hz = rate;
+        options.rate_hz = rate_hz;
         options.yaw = ParseYawSpec(yaw, max_yaw_rate);
         options.fit.max_position_error = max_position_error;
         options.fit.max_velocity_error = max_velocity_error;
@@ -90,7 +90,7 @@ void BindMaps(py::module_& m) {
         options.voxel_radius = voxel_radius;
         WriteExport(trajectory, kind, path, options);
       },
-      py::arg("trajectory"), py::arg("format"), py::arg("path"), py::arg("rate") = kDefaultSampleRateHz,
+      py::arg("trajectory"), py::arg("format"), py::arg("path"), py::arg("rate_hz") = kDefaultSampleRateHz,
       py::arg("yaw") = "velocity", py::arg("max_yaw_rate") = YawOptions().max_rate, py::arg("map") = nullptr,
       py::arg("voxel_radius") = 1.0, py::arg("max_position_error") = PolynomialFitOptions().max_position_error,
       py::arg("max_velocity_error") = PolynomialFitOptions().max_velocity_error,

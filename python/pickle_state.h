@@ -33,7 +33,7 @@ namespace pickle_state {
 
 namespace py = pybind11;
 
-inline constexpr int kStateVersion = 1;
+inline constexpr int kStateVersion = 2;  // 2: plan stage times in seconds
 
 // A reader of one state tuple, field by field in the order written, with the kind's name in its
 // errors.
@@ -330,13 +330,13 @@ inline py::tuple PlanState(const PlanResult& p) {
     iterations.append(py::make_tuple(i.iteration, i.cost, i.step_cost, i.time_seconds, i.step_accepted));
   }
   const PlanStageTimes& times = p.times;
-  return py::make_tuple(
-      "PlanResult", kStateVersion, ToString(p.status), p.message, waypoints, CurveState(p.curve),
-      py::make_tuple(static_cast<int>(s.status), s.message, CurveState(s.curve), s.durations, cost(s.initial_cost),
-                     cost(s.final_cost), iterations, s.solve_time_seconds),
-      ResultState(p.temporal), p.spatial_attempts, p.path_length, p.min_clearance, p.min_interior_speed,
-      p.min_curvature_radius, p.start_scale,
-      py::make_tuple(times.search_ms, times.spatial_ms, times.check_ms, times.temporal_ms, times.total_ms));
+  return py::make_tuple("PlanResult", kStateVersion, ToString(p.status), p.message, waypoints, CurveState(p.curve),
+                        py::make_tuple(static_cast<int>(s.status), s.message, CurveState(s.curve), s.durations,
+                                       cost(s.initial_cost), cost(s.final_cost), iterations, s.solve_time_seconds),
+                        ResultState(p.temporal), p.spatial_attempts, p.path_length, p.min_clearance,
+                        p.min_interior_speed, p.min_curvature_radius, p.start_scale,
+                        py::make_tuple(times.search_seconds, times.spatial_seconds, times.check_seconds,
+                                       times.temporal_seconds, times.total_seconds));
 }
 inline PlanResult PlanFromState(const py::tuple& state) {
   Reader r(state, "PlanResult");

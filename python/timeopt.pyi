@@ -103,8 +103,8 @@ class TemporalResult:
     objective: float
     piece_durations: Array
     iterations: int
-    solve_time: float
-    build_time: float
+    solve_time_seconds: float
+    build_time_seconds: float
     profile: TemporalProfile
     max_velocity_ratio: float
     max_acceleration_ratio: float
@@ -184,7 +184,7 @@ class PlanResult:
     def to_json(self) -> str: ...
     def to_html(self, path: str, map: Optional[OccupancyMap] = None, limits: Optional[Limits] = None) -> None: ...
 
-def export(trajectory: Trajectory, format: str, path: str, rate: float = 100.0, yaw: str = "velocity",
+def export(trajectory: Trajectory, format: str, path: str, rate_hz: float = 100.0, yaw: str = "velocity",
            max_yaw_rate: float = 1.0, map: Optional[OccupancyMap] = None, voxel_radius: float = 1.0,
            max_position_error: float = 1e-3, max_velocity_error: float = 1e-2,
            max_acceleration_error: float = 2e-2) -> None: ...
@@ -234,7 +234,7 @@ class conic:
         primal_objective: float
         dual_objective: float
         iterations: int
-        solve_time: float
+        solve_time_seconds: float
         reduced_accuracy: bool
 
     @staticmethod

@@ -64,7 +64,7 @@ def main():
             ok = result.is_success()
             writer.writerow([parameters["path"], f"{parameters['length_m']:.3f}", parameters["max_jerk"], parameters["K"],
                              result.status.name, f"{result.total_time:.6f}" if ok else "",
-                             f"{result.max_jerk_ratio:.6f}" if ok else "", f"{1e3 * result.solve_time:.3f}",
+                             f"{result.max_jerk_ratio:.6f}" if ok else "", f"{1e3 * result.solve_time_seconds:.3f}",
                              "" if ok else result.message])
     failed = sum(not r.is_success() for r in results)
     print(f"{len(rows)} problems in {seconds:.2f} s on {len(client.nthreads()) if cluster is None else args.workers} "

@@ -182,9 +182,9 @@ int RunPlan(PlanArgs args) {
   const Eigen::Vector3d goal = ParsePoint(args.goal, "--goal");
   PlannerOptions options = OptionsFrom(args);
   // --verbose: one line per stage on stderr as it ends.
-  const auto progress = [&args](const std::string& stage, double ms, const std::string& outcome) {
+  const auto progress = [&args](const std::string& stage, double seconds, const std::string& outcome) {
     if (!args.verbose) return;
-    std::cerr << "timeopt plan: " << stage << ": " << std::fixed << std::setprecision(1) << ms << " ms"
+    std::cerr << "timeopt plan: " << stage << ": " << std::fixed << std::setprecision(1) << seconds * 1e3 << " ms"
               << std::defaultfloat << std::setprecision(6) << (outcome.empty() ? "" : ", " + outcome) << "\n";
   };
   options.on_stage = progress;

@@ -66,7 +66,7 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!positive(relative_gap_tolerance)) return fail("relative_gap_tolerance must be positive and finite");
   if (!positive(infeasibility_tolerance)) return fail("infeasibility_tolerance must be positive and finite");
   if (max_iterations < 0) return fail("max_iterations must be >= 0");
-  if (!(max_solve_time_in_seconds > 0.0)) return fail("max_solve_time_in_seconds must be positive");
+  if (!(max_solve_time_seconds > 0.0)) return fail("max_solve_time_seconds must be positive");
   if (!(step_fraction > 0.0 && step_fraction < 1.0)) return fail("step_fraction must be in (0, 1)");
   if (!(min_step > 0.0 && min_step < 1.0)) return fail("min_step must be in (0, 1)");
   if (!(reduced_feasibility_tolerance >= 0.0)) return fail("reduced_feasibility_tolerance must be >= 0");

@@ -33,8 +33,8 @@ Termination::Decision Termination::Check(const IterateMeasures& it, int iteratio
   if (!CheckMerit(it, pd_gap, gap_scale, iteration, step, reduced_method, &decision)) return decision;
   if (it.kappa > it.tau && CheckInfeasibility(it, data, options_, &decision)) return decision;
   if (iteration >= options_.max_iterations) return stop(Status::kIterationLimit, "max_iterations reached");
-  if (elapsed_seconds() > options_.max_solve_time_in_seconds) {
-    return stop(Status::kIterationLimit, "max_solve_time_in_seconds reached");
+  if (elapsed_seconds() > options_.max_solve_time_seconds) {
+    return stop(Status::kIterationLimit, "max_solve_time_seconds reached");
   }
   return decision;
 }

@@ -191,11 +191,11 @@ std::string PlanResultToJson(const PlanResult& plan, int indent) {
     j["boundary_relaxation"] = {{"start_speed_given", plan.temporal.boundary_relaxation->start_speed_given},
                                 {"start_speed", plan.temporal.boundary_relaxation->start_speed}};
   }
-  j["time_ms"] = {{"search", plan.times.search_ms},
-                  {"spatial", plan.times.spatial_ms},
-                  {"check", plan.times.check_ms},
-                  {"temporal", plan.times.temporal_ms},
-                  {"plan_total", plan.times.total_ms}};
+  j["time_ms"] = {{"search", plan.times.search_seconds * 1e3},
+                  {"spatial", plan.times.spatial_seconds * 1e3},
+                  {"check", plan.times.check_seconds * 1e3},
+                  {"temporal", plan.times.temporal_seconds * 1e3},
+                  {"plan_total", plan.times.total_seconds * 1e3}};
   return j.dump(indent) + "\n";
 }
 

@@ -52,9 +52,7 @@ void CurveQuality(PlanResult* result) {
   result->min_curvature_radius = std::isfinite(radius) ? radius : kNaN;
 }
 
-double MillisecondsSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
+double SecondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 PlanStatus FromSearch(PathSearchStatus status) {
   switch (status) {
@@ -269,8 +267,8 @@ Waypoints SplitSegments(const Waypoints& waypoints, double max_length) {
 namespace {
 
 // Reports a stage to options.on_stage, if set.
-void Report(const PlannerOptions& options, const char* stage, double ms, const std::string& outcome) {
-  if (options.on_stage) options.on_stage(stage, ms, outcome);
+void Report(const PlannerOptions& options, const char* stage, double seconds, const std::string& outcome) {
+  if (options.on_stage) options.on_stage(stage, seconds, outcome);
 }
 
 // The start state the plan flies from. A vehicle tracking at its limits overshoots them by a
@@ -361,9 +359,9 @@ PlanStatus SpatialStage(const Esdf& esdf, const Eigen::Vector3d& start_point, co
     HoldStart(start, options, joints, &attempt_options);
     auto t = Clock::now();
     result.spatial = OptimizeSpatialCurve(esdf, joints, attempt_options);
-    result.times.spatial_ms += MillisecondsSince(t);
+    result.times.spatial_seconds += SecondsSince(t);
     result.spatial_attempts = attempt + 1;
-    Report(options, "spatial", MillisecondsSince(t),
+    Report(options, "spatial", SecondsSince(t),
            "attempt " + std::to_string(attempt + 1) + ", " + std::to_string(joints.cols() - 1) + " pieces, " +
                std::to_string(result.spatial.iterations.size()) + " iterations, " + ToString(result.spatial.status));
     if (!result.spatial.is_usable()) {
@@ -397,10 +395,10 @@ PlanStatus SpatialStage(const Esdf& esdf, const Eigen::Vector3d& start_point, co
       safe = result.min_clearance >=
              std::max(options.robot_radius, std::min(required, options.robot_radius + 0.5 * fine_step));
     }
-    result.times.check_ms += MillisecondsSince(t);
+    result.times.check_seconds += SecondsSince(t);
     std::ostringstream outcome;
     outcome << "clearance " << result.min_clearance << " m (required " << required << " m)";
-    Report(options, "check", MillisecondsSince(t), outcome.str());
+    Report(options, "check", SecondsSince(t), outcome.str());
   }
   result.path_length = result.curve.ArcLength(1e-6);
   if (!safe) {
@@ -441,7 +439,7 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   auto finish = [&](PlanStatus status, std::string message) {
     result.status = status;
     result.message = std::move(message);
-    result.times.total_ms = MillisecondsSince(started);
+    result.times.total_seconds = SecondsSince(started);
     return result;
   };
   std::string error;
@@ -459,8 +457,8 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   search.clearance_margin = options.safety_margin;
   auto t = Clock::now();
   const PathSearchResult path = search_.Search(start, goal, search);
-  result.times.search_ms = MillisecondsSince(t);
-  Report(options, "search", result.times.search_ms,
+  result.times.search_seconds = SecondsSince(t);
+  Report(options, "search", result.times.search_seconds,
          path.is_success() ? std::to_string(path.waypoints.cols()) + " waypoints" : path.message);
   if (!path.is_success()) return finish(FromSearch(path.status), path.message);
   result.waypoints = path.waypoints;
@@ -497,13 +495,13 @@ PlanResult Planner::Plan(const Eigen::Vector3d& start, const Eigen::Vector3d& go
   // jerk limit; TemporalProblem::relax_boundary).
   result.temporal = temporal_->Solve(problem);
   if (result.temporal.boundary_relaxation) result.start_scale = result.temporal.boundary_relaxation->start_scale;
-  result.times.temporal_ms = MillisecondsSince(t);
+  result.times.temporal_seconds = SecondsSince(t);
   {
     std::ostringstream outcome;
     outcome << ToString(result.temporal.status) << ", " << result.temporal.method << ", T "
             << result.temporal.total_time << " s";
     if (result.temporal.scp_iterations > 0) outcome << ", " << result.temporal.scp_iterations << " convex solves";
-    Report(options, "temporal", result.times.temporal_ms, outcome.str());
+    Report(options, "temporal", result.times.temporal_seconds, outcome.str());
   }
   if (result.temporal.status == TemporalStatus::kOptimal) CurveQuality(&result);
   const PlanStatus temporal = FromTemporal(result.temporal, &message);

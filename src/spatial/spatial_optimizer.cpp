@@ -117,8 +117,8 @@ bool SpatialOptimizerOptions::IsValid(std::string* error) const {
     if (!std::isfinite(start_curvature(a))) return fail("start_curvature", "finite numbers", start_curvature(a));
   }
   if (max_iterations < 0) return fail("max_iterations", "an integer >= 0", max_iterations);
-  if (!Positive(max_solver_time_in_seconds)) {
-    return fail("max_solver_time_in_seconds", "a positive number", max_solver_time_in_seconds);
+  if (!Positive(max_solver_time_seconds)) {
+    return fail("max_solver_time_seconds", "a positive number", max_solver_time_seconds);
   }
   if (!NonNegative(function_tolerance)) return fail("function_tolerance", "a number >= 0", function_tolerance);
   if (!NonNegative(gradient_tolerance)) return fail("gradient_tolerance", "a number >= 0", gradient_tolerance);
@@ -272,7 +272,7 @@ void Minimize(const SpatialOptimizerOptions& options, ceres::Problem* problem, S
   solver.linear_solver_type =
       options.linear_solver == SpatialLinearSolver::kDenseQr ? ceres::DENSE_QR : ceres::SPARSE_NORMAL_CHOLESKY;
   solver.max_num_iterations = options.max_iterations;
-  solver.max_solver_time_in_seconds = options.max_solver_time_in_seconds;
+  solver.max_solver_time_in_seconds = options.max_solver_time_seconds;
   solver.function_tolerance = options.function_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
   solver.parameter_tolerance = options.parameter_tolerance;

@@ -546,8 +546,8 @@ class IpoptTemporalSolver final : public TemporalSolver {
     ok &= o.SetStringValue("sb", "yes");  // no banner
     ok &= o.SetNumericValue("tol", options_.tolerance);
     ok &= o.SetIntegerValue("max_iter", options_.max_iterations);
-    if (std::isfinite(options_.max_solve_time_in_seconds)) {
-      ok &= o.SetNumericValue("max_cpu_time", options_.max_solve_time_in_seconds);
+    if (std::isfinite(options_.max_solve_time_seconds)) {
+      ok &= o.SetNumericValue("max_cpu_time", options_.max_solve_time_seconds);
     }
     ok &= o.SetNumericValue("constr_viol_tol", kConstraintViolationTolerance);
     ok &= o.SetNumericValue("compl_inf_tol", kComplementarityTolerance);
@@ -640,7 +640,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
       case Ipopt::Maximum_CpuTime_Exceeded:
         result->status = TemporalStatus::kIterationLimit;
         result->message =
-            "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_in_seconds) + " s) exceeded";
+            "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_seconds) + " s) exceeded";
         return;
       default:
         result->status = TemporalStatus::kNumericalError;

@@ -226,10 +226,10 @@ bool SocpTemporalOptions::IsValid(std::string* error) const {
 
 bool IpoptTemporalOptions::IsValid(std::string* error) const {
   if (!ValidSolverOptions(tolerance, max_iterations, 0, error)) return false;
-  if (!(max_solve_time_in_seconds > 0.0)) {
+  if (!(max_solve_time_seconds > 0.0)) {
     if (error)
       *error =
-          "max_solve_time_in_seconds: expected a positive number, got " + std::to_string(max_solve_time_in_seconds);
+          "max_solve_time_seconds: expected a positive number, got " + std::to_string(max_solve_time_seconds);
     return false;
   }
   return true;
@@ -279,7 +279,7 @@ std::unique_ptr<TemporalSolver> MakeBudgetedTemporalSolver(TemporalBackend backe
     return MakeSocpTemporalSolver(options);
   }
   IpoptTemporalOptions options;
-  if (ipopt_seconds) options.max_solve_time_in_seconds = *ipopt_seconds;
+  if (ipopt_seconds) options.max_solve_time_seconds = *ipopt_seconds;
   return MakeIpoptTemporalSolver(options);
 }
 
@@ -430,7 +430,7 @@ TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
   if (fallback && fallback_fits) {
     // Bounded, so that a problem Ipopt cannot solve either ends with a status, not a wait.
     IpoptTemporalOptions fallback;
-    fallback.max_solve_time_in_seconds = jerk_ipopt_fallback_seconds();
+    fallback.max_solve_time_seconds = jerk_ipopt_fallback_seconds();
     TemporalResult exact = MakeIpoptTemporalSolver(fallback)->Solve(problem);
     exact.build_time_seconds += result.build_time_seconds;
     exact.solve_time_seconds += result.solve_time_seconds;

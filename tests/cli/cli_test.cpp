@@ -174,7 +174,7 @@ TEST_F(CliTest, RequestsThatCannotBeMetAreRefusedBeforeAnyOutput) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   r = RunCli("temporal " + line + " --solver ipopt --ipopt-seconds 0");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.output, HasSubstr("max_solve_time_in_seconds"));
+  EXPECT_THAT(r.output, HasSubstr("max_solve_time_seconds"));
   // And for a conic problem: min x s.t. x >= 1 needs 64 MiB for the process alone.
   Write("tiny.cbf",
         "VER\n3\nOBJSENSE\nMIN\nVAR\n1 1\nF 1\nCON\n1 1\nL+ 1\nOBJACOORD\n1\n0 1\nACOORD\n1\n0 0 1\nBCOORD\n1\n0 -1\n");

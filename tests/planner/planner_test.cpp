@@ -59,7 +59,7 @@ TEST(Planner, ForestPlansKeepTheRobotRadiusAgainstTheOctreeVoxels) {
       options.robot_radius = 0.3;
       // The iteration limit alone: the same curve on every machine, also under the sanitizers
       // (the default time guard of 10 s is far from binding there).
-      options.spatial.max_solver_time_in_seconds = 60.0;
+      options.spatial.max_solver_time_seconds = 60.0;
       Eigen::Vector3d start = FreePoint(*f.esdf, &rng, 0.5, 0.5, 3.0);
       Eigen::Vector3d goal = FreePoint(*f.esdf, &rng, 0.5, 7.0, 9.5);
       const PlanResult plan = planner.Plan(start, goal, options);
@@ -105,7 +105,7 @@ TEST(Planner, ChordalPiecesRemoveTheHooksOfTheDefaultPlan) {
       Esdf::FromMapRegion(map, Eigen::AlignedBox3d(Eigen::Vector3d(-9, -9, -10), Eigen::Vector3d(29, 29, 11)));
   Planner planner(esdf);
   PlannerOptions options;
-  options.spatial.max_solver_time_in_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
+  options.spatial.max_solver_time_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
   const Eigen::Vector3d start(1, 1, 1.5), goal(19, 19, 1.5);
   const PlanResult chordal = planner.Plan(start, goal, options);
   ASSERT_TRUE(chordal.is_success()) << chordal.message;
@@ -143,7 +143,7 @@ TEST(Planner, TheSmoothnessWeightRemovesTheHooksAtFrontEndCorners) {
     const Esdf esdf = Esdf::FromMapRegion(map, PlanRegion(pair.start, pair.goal));  // as timeopt plan
     Planner planner(esdf);
     PlannerOptions options;
-    options.spatial.max_solver_time_in_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
+    options.spatial.max_solver_time_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
     const double floor = 0.3 * options.limits.max_velocity.minCoeff();
     const PlanResult plan = planner.Plan(pair.start, pair.goal, options);
     ASSERT_TRUE(plan.is_success()) << plan.message;
@@ -182,7 +182,7 @@ TEST(Planner, TheSearchWeightRemovesTheDetoursOfDenseForests) {
     const Esdf esdf = Esdf::FromMapRegion(map, PlanRegion(c.start, c.goal));  // as timeopt plan
     Planner planner(esdf);
     PlannerOptions options;
-    options.spatial.max_solver_time_in_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
+    options.spatial.max_solver_time_seconds = 60.0;  // the iteration limit alone: the same curve on every machine
     const PlanResult plan = planner.Plan(c.start, c.goal, options);
     ASSERT_TRUE(plan.is_success()) << plan.message;
     EXPECT_GE(plan.min_interior_speed, 0.3 * options.limits.max_velocity.minCoeff()) << "density " << c.density;

@@ -379,7 +379,7 @@ int Run(std::uint64_t seed, int first, int count, bool verbose, const std::strin
     }
   };
   IpoptTemporalOptions ipopt_options;
-  ipopt_options.max_solve_time_in_seconds = settings.ipopt_seconds;
+  ipopt_options.max_solve_time_seconds = settings.ipopt_seconds;
   // The SOCP backend's Ipopt fallback (jerk-limited rows whose conic solves fail) under the same
   // cap, so that a problem neither solves costs seconds, not the default 20.
   SocpTemporalOptions socp_options;

@@ -222,7 +222,7 @@ struct SolverOptions {
   /// Maximum interior-point iterations. 100 (a healthy problem needs 10-40).
   int max_iterations = 100;
   /// Wall-time limit of one Solve(), seconds. Infinite by default.
-  double max_solve_time_in_seconds = std::numeric_limits<double>::infinity();
+  double max_solve_time_seconds = std::numeric_limits<double>::infinity();
   /// Fraction of the step to the cone boundary that is taken, in (0, 1). 0.99 keeps iterates
   /// strictly interior without slowing convergence.
   double step_fraction = 0.99;

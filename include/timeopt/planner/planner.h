@@ -75,9 +75,9 @@ struct PlannerOptions {
   // (smallest axis).
   SpatialOptimizerOptions spatial;
   // Called as each stage ends (the library prints nothing; `timeopt plan --verbose` prints these):
-  // the stage ("search", "spatial", "check", "temporal"), its duration in milliseconds and a short
+  // the stage ("search", "spatial", "check", "temporal"), its duration in seconds and a short
   // description of its outcome. Not part of the JSON configuration. Empty: not called.
-  std::function<void(const std::string& stage, double milliseconds, const std::string& outcome)> on_stage;
+  std::function<void(const std::string& stage, double seconds, const std::string& outcome)> on_stage;
   // Attempts of the spatial stage: attempt k (0-based) multiplies the collision weight by
   // retry_collision_weight_factor^k and divides max_segment_length by 2^k. 4 attempts.
   int max_attempts = 4;
@@ -136,12 +136,13 @@ const char* ToString(PlanStatus status);
 // The enumerator named `text` (as ToString writes it) into *status; false when none is.
 bool FromString(const std::string& text, PlanStatus* status);
 
+// Wall time of each stage of a plan, seconds (the plan summary's "time_ms" gives them in ms).
 struct PlanStageTimes {
-  double search_ms = 0.0;
-  double spatial_ms = 0.0;   // all attempts
-  double check_ms = 0.0;     // clearance post-checks
-  double temporal_ms = 0.0;  // building and solving the temporal problem
-  double total_ms = 0.0;
+  double search_seconds = 0.0;
+  double spatial_seconds = 0.0;   // all attempts
+  double check_seconds = 0.0;     // clearance post-checks
+  double temporal_seconds = 0.0;  // building and solving the temporal problem
+  double total_seconds = 0.0;
 };
 
 struct PlanResult {

@@ -121,7 +121,7 @@ struct SpatialOptimizerOptions {
   // under any load. The time limit only guards against a runaway solve: at 0.1 s it bound under load
   // (two processes on one busy machine planned the shipped forest 0.12% apart).
   int max_iterations = 100;
-  double max_solver_time_in_seconds = 10.0;
+  double max_solver_time_seconds = 10.0;
   // Ceres' relative cost-change tolerance. 1e-5: the curve moves by far less than a voxel after.
   double function_tolerance = 1e-5;
   double gradient_tolerance = 1e-10;

@@ -134,7 +134,7 @@ struct IpoptTemporalOptions {
   // an infeasible jerk-limited problem with the exact rows ran for more than 10 minutes at
   // m = 3, K = 100 (the property sweep), while every solve of the tests, benchmarks and
   // experiments takes under 10 s. Infinite: Ipopt's own cap of 1e6 s.
-  double max_solve_time_in_seconds = 300.0;
+  double max_solve_time_seconds = 300.0;
 
   // False, with "<field>: expected <what>, got <value>" in *error, unless tolerance is positive
   // and finite and max_iterations >= 0.
