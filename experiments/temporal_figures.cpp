@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
       }
       double energy = 0.0;
       for (int i = 0; i < r.profile.num_pieces(); ++i)
-        for (int k = 0; k < r.profile.cells_per_piece(); ++k) energy += std::pow(r.profile.a(i, k), 2) * r.profile.ds();
+        for (int k = 0; k < r.profile.cells_per_piece(); ++k) energy += std::pow(r.profile.a(i, k), 2) * r.profile.CellLength(i, k);
       csv.out << rho << "," << r.total_time << "," << energy << "," << r.iterations << "\n";
       const Trajectory traj(turn, r.profile);
       PlotSeries sv{"rho " + std::to_string(static_cast<int>(rho)), {}, {}, kColors[color], false}, sa = sv;

@@ -293,7 +293,7 @@ void DenseLimitRatios(const TemporalProblem& problem, const TemporalProfile& pro
   if (samples_per_cell < 1) throw std::invalid_argument("DenseLimitRatios: samples_per_cell < 1");
   double vr = 0.0, ar = 0.0, jr = 0.0;
   const int K = profile.cells_per_piece();
-  const double ds = profile.ds();
+  const double ds = 1.0 / K;  // the cells of a profile without a jerk limit
   const Eigen::Vector3d inv_v = problem.limits.max_velocity.cwiseInverse();
   const Eigen::Vector3d inv_a = problem.limits.max_acceleration.cwiseInverse();
   const bool jerk = problem.limits.max_jerk.has_value();

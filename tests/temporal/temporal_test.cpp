@@ -348,7 +348,7 @@ TEST(TemporalDiscretization, AccelerationNormScaleOnAStraightLine) {
 // Acceleration of the exact trajectory at the middle of cell k of piece i, computed from the
 // curve and b alone (b is linear on the cell, so b(s_mid) = (b^k + b^{k+1}) / 2).
 Eigen::Vector3d MidCellAcceleration(const TemporalProblem& p, const TemporalProfile& prof, int i, int k) {
-  const double s = (k + 0.5) * prof.ds();
+  const double s = prof.CellStart(i, k) + 0.5 * prof.CellLength(i, k);
   return p.curve.Evaluate(i, s, 1) * prof.a(i, k) + p.curve.Evaluate(i, s, 2) * 0.5 * (prof.b(i, k) + prof.b(i, k + 1));
 }
 
@@ -394,7 +394,7 @@ TEST_P(BothBackends, LimitsHoldAtGridPointsAndCellMiddlesWithAccelerationChangeB
     for (int k = 0; k < prof.cells_per_piece(); ++k) {
       // Find the time of the cell middle from the sampled trajectory's own t <-> s map:
       // s(t) = s_k + sqrt(b^k) tau + a tau^2 / 2 = s_k + ds / 2.
-      const double v0 = std::sqrt(prof.b(i, k)), a = prof.a(i, k), h = 0.5 * prof.ds();
+      const double v0 = std::sqrt(prof.b(i, k)), a = prof.a(i, k), h = 0.5 * prof.CellLength(i, k);
       const double tau = std::abs(a) < 1e-14 ? h / v0 : (-v0 + std::sqrt(v0 * v0 + 2 * a * h)) / a;
       const TrajectoryState s = traj.Evaluate(prof.TimeAt(i, k) + tau);
       EXPECT_LE((s.acceleration.cwiseAbs() - p.limits.max_acceleration).maxCoeff(), tol);

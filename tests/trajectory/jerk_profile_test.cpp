@@ -225,7 +225,7 @@ TEST(JerkProfile, AtTimeInvertsTimeAtS) {
       }
       // Grid times agree with the integral of 1 / sdot up to each grid point.
       for (int k = 0; k <= profile.cells_per_piece(); ++k) {
-        EXPECT_NEAR(profile.TimeAtS(i, k * profile.ds()), profile.TimeAt(i, k), 4 * kEps * T);
+        EXPECT_NEAR(profile.TimeAtS(i, profile.CellStart(i, k)), profile.TimeAt(i, k), 4 * kEps * T);
       }
     }
     EXPECT_GE(checked, 790);

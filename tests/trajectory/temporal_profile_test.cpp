@@ -43,7 +43,7 @@ TEST(TemporalProfile, CellTimesFollowConstantAccelerationKinematics) {
   ASSERT_EQ(profile.num_pieces(), 2);
   ASSERT_EQ(profile.cells_per_piece(), 4);
   const double ds = 0.25;
-  EXPECT_EQ(profile.ds(), ds);
+  EXPECT_EQ(profile.CellLength(0, 0), ds);
   double t = 0.0;
   for (int i = 0; i < 2; ++i) {
     const double piece_start = t;
@@ -66,7 +66,7 @@ TEST(TemporalProfile, CellTimesFollowConstantAccelerationKinematics) {
 TEST(TemporalProfile, AtTimeInvertsTheTimeOfEveryS) {
   const Grid b = HandMadeB();
   const TemporalProfile profile(b);
-  const double ds = profile.ds();
+  const double ds = profile.CellLength(0, 0);
   int checked = 0;
   for (int i = 0; i < 2; ++i) {
     for (int k = 0; k < 4; ++k) {

@@ -2,8 +2,10 @@
 
 // The solution of a temporal problem on its grid, and the exact map between time and s.
 //
-// A profile holds b = sdot^2 on a grid of K cells of length ds = 1 / K per piece. Each cell has a
-// shape (CellShape) that says how b runs between its grid values; with sigma = s - s_k in [0, ds]:
+// A profile holds b = sdot^2 on a grid of K cells per piece, of length ds = 1 / K (a jerk-limited
+// profile's cells may be graded towards rest points: then ds is each cell's own length, CellLength).
+// Each cell has a shape (CellShape) that says how b runs between its grid values; with
+// sigma = s - s_k in [0, ds]:
 //
 // - kLinear (profiles from the constructor): b linear, a = sddot constant, sdddot = 0. A cell that
 //   starts at time t_k with speed sqrt(b^k) has s(t) = s_k + sqrt(b^k) (t - t_k) + a (t - t_k)^2 / 2,
@@ -84,8 +86,8 @@ class TemporalProfile {
 
   int num_pieces() const { return static_cast<int>(b_.size()); }
   int cells_per_piece() const { return cells_per_piece_; }
-  double ds() const { return 1.0 / cells_per_piece_; }
-  // Where cell k of piece i starts in s, and its length (1 / K each unless cell_edges were given).
+  // Where cell k of piece i starts in s (k = K: 1), and its length: 1 / K each unless cell_edges
+  // were given (a jerk-limited profile's cells are graded towards rest points).
   double CellStart(int piece, int k) const;
   double CellLength(int piece, int k) const;
   // True for a profile made by JerkLimited.
