@@ -241,8 +241,10 @@ void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d,
       const double distance = speed * (end ? 1.0 - s : s);
       const double cap = speed_at(distance) / speed;
       double& value = (*b)[static_cast<size_t>(d.GridIndex(piece, h))];
+      // A fixed value (the boundary's own b, which the cap equals) says nothing of the guess.
+      if (d.grid[static_cast<size_t>(d.GridIndex(piece, h))].var < 0) continue;
       if (value <= cap * cap) break;  // the guess is below the fastest motion from here on
-      if (d.grid[static_cast<size_t>(d.GridIndex(piece, h))].var >= 0) value = cap * cap;
+      value = cap * cap;
     }
   }
 }
@@ -691,6 +693,11 @@ TemporalResult JerkLimitedSolve::SolveGeneral() {
     return Finish(first);
   }
   history_.push_back(first.total_time);
+  // Braking ends linearized where the vehicle can be (CapAtBrakingEnds), as on the structured path.
+  try {
+    CapAtBrakingEnds(problem_, DiscretizeJerkLimited(problem_, JerkRows::kNone), &linearization);
+  } catch (const std::invalid_argument&) {
+  }
 
   bool have_best = false, converged_once = false;
   std::optional<TemporalResult> stopped;  // the failed solve that ended the programme early
