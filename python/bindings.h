@@ -4,6 +4,7 @@
 // with the argument's name in every error, the limits and budgets every part reads from keyword
 // arguments, and the functions that bind each part of the library.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -26,6 +27,8 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+
+#include "io/json_internal.h"
 
 #include "timeopt/curve/piecewise_curve.h"
 #include "timeopt/temporal/temporal_solver.h"
@@ -159,33 +162,31 @@ inline py::array_t<double> ToRows(const Eigen::Matrix3Xd& m) {
 
 inline py::object Optional(const std::optional<double>& value) { return value ? py::cast(*value) : py::none(); }
 
-// Limits from keyword arguments: per-axis values broadcast from scalars, None for "not set".
+// One limit from a keyword argument, read as the problem files and planner configurations read
+// their "limits" (internal::ReadLimits): per-axis values as one number or three, None for "not
+// set" (no limit), numbers finite. Python's own part is turning the value into JSON.
 inline void SetLimit(VehicleLimits* l, const std::string& key, const py::handle& value) {
-  const auto scalar = [&](std::optional<double>* field) {
-    *field = value.is_none() ? std::nullopt : std::optional<double>(value.cast<double>());
-  };
-  if (key == "max_velocity") {
-    l->max_velocity = Vec3(value, "max_velocity", true);
-  } else if (key == "max_acceleration") {
-    l->max_acceleration = Vec3(value, "max_acceleration", true);
-  } else if (key == "max_jerk") {
-    l->max_jerk = value.is_none() ? std::nullopt : std::optional<Eigen::Vector3d>(Vec3(value, "max_jerk", true));
-  } else if (key == "max_speed") {
-    scalar(&l->max_speed);
-  } else if (key == "max_acceleration_norm") {
-    scalar(&l->max_acceleration_norm);
-  } else if (key == "max_thrust") {
-    scalar(&l->max_thrust);
-  } else if (key == "min_thrust") {
-    scalar(&l->min_thrust);
-  } else if (key == "max_tilt") {
-    scalar(&l->max_tilt);
-  } else if (key == "max_acceleration_change") {
-    scalar(&l->max_acceleration_change);
-  } else if (key == "gravity") {
-    l->gravity = value.cast<double>();
-  } else {
+  if (std::find_if(internal::kLimitKeys.begin(), internal::kLimitKeys.end(), [&](const char* k) { return key == k; }) ==
+      internal::kLimitKeys.end()) {
     throw py::type_error("Limits: unknown keyword '" + key + "'");
+  }
+  nlohmann::json j = nlohmann::json::object();
+  if (value.is_none()) {
+    j[key] = nullptr;
+  } else {
+    const auto a = AsDoubles(value, key.c_str());
+    if (a.ndim() == 0) {
+      j[key] = *a.data();
+    } else if (a.ndim() == 1 && a.shape(0) == 3) {
+      j[key] = nlohmann::json::array({a.data()[0], a.data()[1], a.data()[2]});
+    } else {
+      throw py::value_error(key + ": expected 3 values or one, got shape " + ShapeText(a));
+    }
+  }
+  try {
+    internal::ReadLimits(j, "Limits", l);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
   }
 }
 

@@ -25,10 +25,7 @@ Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field) {
 
 void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits* limits) {
   RequireObject(j, where);
-  RejectUnknownKeys(j,
-                    {"max_velocity", "max_acceleration", "max_acceleration_change", "max_jerk", "max_speed",
-                     "max_acceleration_norm", "max_thrust", "min_thrust", "max_tilt", "gravity"},
-                    where);
+  RejectUnknownKeys(j, std::set<std::string>(kLimitKeys.begin(), kLimitKeys.end()), where);
   constexpr double kNone = std::numeric_limits<double>::infinity();
   const auto per_axis = [&](const char* key, Eigen::Vector3d* field) {
     if (!j.contains(key)) return;

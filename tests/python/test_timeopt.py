@@ -127,6 +127,31 @@ def test_trajectory_samples_start_at_rest_and_hold_the_limits():
     assert v[350, 0] == pytest.approx(2.0, rel=1e-6)
 
 
+def test_limits_keywords_are_a_limits_object_of_the_files():
+    # The keywords go through the reader of the files' "limits" object (one key set, one reader):
+    # the shipped planner configuration's limits, every key with its value or null, are keywords
+    # as they stand, and read back to the same values; a value the files refuse is refused, naming
+    # the key.
+    with open(os.path.join(SOURCE, "examples", "planner_config.json")) as f:
+        written = json.load(f)["limits"]
+    assert len(written) == 10
+    limits = timeopt.Limits(**written)
+    for key, value in written.items():
+        if key == "max_acceleration_change":
+            continue  # no attribute; its repr below
+        got = getattr(limits, key)
+        if value is None:
+            assert got is None, key
+        else:
+            assert np.allclose(got, value, rtol=0, atol=0), key
+    assert "max_acceleration_change" not in repr(limits)
+    assert repr(timeopt.Limits(max_acceleration_change=5)).endswith("max_acceleration_change=5)")
+    with pytest.raises(ValueError, match="Limits.max_speed: expected a finite number"):
+        timeopt.Limits(max_speed=math.inf)
+    with pytest.raises(ValueError, match="Limits.max_tilt: expected a number"):
+        timeopt.Limits(max_tilt=[0.1, 0.2, 0.3])
+
+
 def test_bad_shapes_and_types_are_clear_exceptions():
     with pytest.raises(ValueError, match=r"max_velocity: expected 3 values or one, got shape \(2,\)"):
         timeopt.Limits(max_velocity=[1.0, 2.0])
