@@ -45,14 +45,16 @@ Eigen::Vector3d PerAxis(const nlohmann::json& j, const std::string& field);
 // The vehicle limits of a "limits" object (where: its field name, e.g. "limits"), laid over
 // *limits: a key present sets its limit, a key absent leaves it. null is "none": no per-axis limit
 // (infinity on every axis), no jerk limit, no quadrotor limit; for gravity, unchanged. Unknown keys
-// are refused. The one reader of limits for problem files and planner configs.
+// are refused. The one reader of limits for problem files, planner configs and Python's keywords.
 void ReadLimits(const nlohmann::json& j, const std::string& where, VehicleLimits* limits);
 // The keys ReadLimits reads and LimitsJson writes: every field of VehicleLimits.
-inline constexpr std::array<const char*, 10> kLimitKeys = {"max_velocity", "max_acceleration",
-                                                           "max_jerk",     "max_acceleration_change",
-                                                           "max_speed",    "max_acceleration_norm",
-                                                           "max_thrust",   "min_thrust",
-                                                           "max_tilt",     "gravity"};
+inline constexpr std::array<const char*, 10> kLimitKeys = {
+    "max_velocity", "max_acceleration",
+    "max_jerk",     "max_acceleration_change",
+    "max_speed",    "max_acceleration_norm",
+    "max_thrust",   "min_thrust",
+    "max_tilt",     "gravity",
+};
 // The limits as a "limits" object that ReadLimits reads back to the same values: per-axis limits
 // as arrays (null when infinite on every axis), the jerk limit and the optional ones as values or
 // null, gravity. (A per-axis limit infinite on some axes only has no JSON form: such an axis is
