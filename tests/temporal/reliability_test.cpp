@@ -320,6 +320,19 @@ TEST(Reliability, SlowMinimumJerkCurvesAreAnsweredByBothBackends) {
   }
 }
 
+// Solves the problem of tests/temporal/data/<name> with both backends: the SOCP backend must answer
+// by its structured path and agree with Ipopt, a second solver of the same convex problem, to the
+// property sweep's bound for the convex rows, 1e-6 (each solves to 1e-8).
+void ExpectStructuredAgreesWithIpopt(const std::string& name) {
+  const TemporalProblem p = ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/" + name);
+  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
+  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
+  ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << name << ": " << socp.message;
+  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << name << ": " << ipopt.message;
+  EXPECT_EQ(socp.method, "structured") << name;
+  EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6) << name;
+}
+
 // Slow minimum-jerk curves at K = 315-459 (paper rows; both end tangents vanish, so b is held by
 // its cap next to the ends): the structured path's iterates went round a cycle until its iteration
 // limit, and the conic solver then stalled. The structured path now answers (its corrector only
@@ -327,14 +340,7 @@ TEST(Reliability, SlowMinimumJerkCurvesAreAnsweredByBothBackends) {
 // the same convex problem, to the sweep's bound for the convex rows: 1e-6 (each solves to 1e-8).
 TEST(Reliability, SlowMinimumJerkCurvesAtLargeKAreAnswered) {
   for (const char* index : {"2247", "5253", "7827", "8319"}) {
-    const std::string path = std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_minjerk_" + index + ".json";
-    const TemporalProblem p = ReadTemporalProblemJson(path);
-    const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
-    const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
-    ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << index << ": " << socp.message;
-    ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << index << ": " << ipopt.message;
-    EXPECT_EQ(socp.method, "structured") << index;
-    EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6) << index;
+    ExpectStructuredAgreesWithIpopt(std::string("sweep_minjerk_") + index + ".json");
   }
 }
 
@@ -342,34 +348,18 @@ TEST(Reliability, SlowMinimumJerkCurvesAtLargeKAreAnswered) {
 // about 0.8 m/s; paper rows, K = 239, T = 0.029 s; the property sweep's seed 3, problem 9450, a
 // seed nothing was tuned on). Its unknowns had been scaled by the squared speed limit capped at
 // 1e6 times what the acceleration limits reach, so they sat near 1e-6, and both the structured path
-// and the conic solver failed. The cap is now 4 times (no squared speed on the path exceeds 1.8 times it):
-// the structured path must answer, and agree with Ipopt, a second solver of the same convex
-// problem, to the sweep's bound for the convex rows, 1e-6.
+// and the conic solver failed. The cap is now 4 times (no squared speed on the path exceeds 1.8
+// times it).
 TEST(Reliability, AnUnknownScaledByALimitFarAboveTheReachableSpeedIsAnswered) {
-  const TemporalProblem p =
-      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_seed3_minjerk_9450.json");
-  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
-  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
-  ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << socp.message;
-  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << ipopt.message;
-  EXPECT_EQ(socp.method, "structured");
-  EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6);
+  ExpectStructuredAgreesWithIpopt("sweep_seed3_minjerk_9450.json");
 }
 
 // A minimum-jerk curve of three 1 cm pieces at K = 19 (paper rows, T = 0.057 s): the structured
 // path's Newton system broke down with every tolerance met but r_d (at 1.09 times it; s'z at 4e-13
 // of J), and the conic solver then stalled. The system is now factored again with its diagonal
-// raised by 1e-10 of itself; the answer must agree with Ipopt, a second solver of the same convex
-// problem, to the sweep's bound for the convex rows, 1e-6.
+// raised by 1e-10 of itself.
 TEST(Reliability, ANearlySingularNewtonSystemIsFactoredAgain) {
-  const TemporalProblem p =
-      ReadTemporalProblemJson(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/sweep_minjerk_4194.json");
-  const TemporalResult socp = MakeSocpTemporalSolver()->Solve(p);
-  const TemporalResult ipopt = MakeIpoptTemporalSolver()->Solve(p);
-  ASSERT_EQ(socp.status, TemporalStatus::kOptimal) << socp.message;
-  ASSERT_EQ(ipopt.status, TemporalStatus::kOptimal) << ipopt.message;
-  EXPECT_EQ(socp.method, "structured");
-  EXPECT_NEAR(socp.total_time / ipopt.total_time, 1.0, 1e-6);
+  ExpectStructuredAgreesWithIpopt("sweep_minjerk_4194.json");
 }
 
 // A polyline of three 1.5 cm pieces flown in 0.054 s (certified rows, K = 253). Ipopt's
