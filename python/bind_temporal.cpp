@@ -97,12 +97,27 @@ void BindLimits(py::module_& m) {
             return l.max_jerk ? py::object(ToArray(*l.max_jerk)) : py::none();
           },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_jerk", v); })
-      .def_readwrite("max_speed", &VehicleLimits::max_speed)
-      .def_readwrite("max_acceleration_norm", &VehicleLimits::max_acceleration_norm)
-      .def_readwrite("max_thrust", &VehicleLimits::max_thrust)
-      .def_readwrite("min_thrust", &VehicleLimits::min_thrust)
-      .def_readwrite("max_tilt", &VehicleLimits::max_tilt)
-      .def_readwrite("gravity", &VehicleLimits::gravity)
+      .def_property(
+          "max_speed", [](const VehicleLimits& l) { return Optional(l.max_speed); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_speed", v); })
+      .def_property(
+          "max_acceleration_norm", [](const VehicleLimits& l) { return Optional(l.max_acceleration_norm); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_acceleration_norm", v); })
+      .def_property(
+          "max_thrust", [](const VehicleLimits& l) { return Optional(l.max_thrust); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_thrust", v); })
+      .def_property(
+          "min_thrust", [](const VehicleLimits& l) { return Optional(l.min_thrust); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "min_thrust", v); })
+      .def_property(
+          "max_tilt", [](const VehicleLimits& l) { return Optional(l.max_tilt); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_tilt", v); })
+      .def_property(
+          "max_acceleration_change", [](const VehicleLimits& l) { return Optional(l.max_acceleration_change); },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_acceleration_change", v); })
+      .def_property(
+          "gravity", [](const VehicleLimits& l) { return l.gravity; },
+          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "gravity", v); })
       .def(py::pickle(&pickle_state::LimitsState, &pickle_state::LimitsFromState))
       .def("__repr__", [](const VehicleLimits& l) {
         std::ostringstream s;

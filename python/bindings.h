@@ -172,6 +172,8 @@ inline void SetLimit(VehicleLimits* l, const std::string& key, const py::handle&
   }
   nlohmann::json j = nlohmann::json::object();
   if (value.is_none()) {
+    // (A file's null gravity leaves it as it is; here that would be a silent no-op.)
+    if (key == "gravity") throw py::value_error("Limits.gravity: expected a number, got None");
     j[key] = nullptr;
   } else {
     const auto a = AsDoubles(value, key.c_str());

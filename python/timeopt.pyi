@@ -47,6 +47,7 @@ class Limits:
     max_thrust: Optional[float]
     min_thrust: Optional[float]
     max_tilt: Optional[float]
+    max_acceleration_change: Optional[float]
     gravity: float
 
 class Curve:

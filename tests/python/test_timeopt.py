@@ -137,8 +137,6 @@ def test_limits_keywords_are_a_limits_object_of_the_files():
     assert len(written) == 10
     limits = timeopt.Limits(**written)
     for key, value in written.items():
-        if key == "max_acceleration_change":
-            continue  # no attribute; its repr below
         got = getattr(limits, key)
         if value is None:
             assert got is None, key
@@ -150,6 +148,13 @@ def test_limits_keywords_are_a_limits_object_of_the_files():
         timeopt.Limits(max_speed=math.inf)
     with pytest.raises(ValueError, match="Limits.max_tilt: expected a number"):
         timeopt.Limits(max_tilt=[0.1, 0.2, 0.3])
+    # The attributes are set through the same reader.
+    limits.max_acceleration_change = 5
+    assert limits.max_acceleration_change == 5
+    with pytest.raises(ValueError, match="Limits.gravity: expected a finite number"):
+        limits.gravity = math.nan
+    with pytest.raises(ValueError, match="Limits.gravity: expected a number, got None"):
+        limits.gravity = None
 
 
 def test_bad_shapes_and_types_are_clear_exceptions():
