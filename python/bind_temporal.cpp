@@ -72,12 +72,21 @@ TemporalResult SolveProblem(const TemporalProblem& problem, const std::string& s
 }
 
 // Limits.
+// The limits that are one number or none (None in Python), in the order repr writes them; each is
+// an attribute set through SetLimit.
+constexpr std::pair<const char*, std::optional<double> VehicleLimits::*> kOptionalLimits[] = {
+    {"max_speed", &VehicleLimits::max_speed},   {"max_acceleration_norm", &VehicleLimits::max_acceleration_norm},
+    {"max_thrust", &VehicleLimits::max_thrust}, {"min_thrust", &VehicleLimits::min_thrust},
+    {"max_tilt", &VehicleLimits::max_tilt},     {"max_acceleration_change", &VehicleLimits::max_acceleration_change},
+};
+
 void BindLimits(py::module_& m) {
-  py::class_<VehicleLimits>(
+  py::class_<VehicleLimits> limits(
       m, "Limits",
       "Vehicle limits: per-axis max_velocity and max_acceleration (m/s, m/s^2; +inf for none), "
       "optional per-axis max_jerk, and the quadrotor's max_speed, max_acceleration_norm, max_thrust, "
-      "min_thrust (m/s^2), max_tilt (rad), gravity.")
+      "min_thrust (m/s^2), max_tilt (rad), gravity.");
+  limits
       .def(py::init([](const py::kwargs& kwargs) {
              VehicleLimits l = FlightLimits();
              for (const auto& item : kwargs) SetLimit(&l, item.first.cast<std::string>(), item.second);
@@ -98,24 +107,6 @@ void BindLimits(py::module_& m) {
           },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_jerk", v); })
       .def_property(
-          "max_speed", [](const VehicleLimits& l) { return Optional(l.max_speed); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_speed", v); })
-      .def_property(
-          "max_acceleration_norm", [](const VehicleLimits& l) { return Optional(l.max_acceleration_norm); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_acceleration_norm", v); })
-      .def_property(
-          "max_thrust", [](const VehicleLimits& l) { return Optional(l.max_thrust); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_thrust", v); })
-      .def_property(
-          "min_thrust", [](const VehicleLimits& l) { return Optional(l.min_thrust); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "min_thrust", v); })
-      .def_property(
-          "max_tilt", [](const VehicleLimits& l) { return Optional(l.max_tilt); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_tilt", v); })
-      .def_property(
-          "max_acceleration_change", [](const VehicleLimits& l) { return Optional(l.max_acceleration_change); },
-          [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "max_acceleration_change", v); })
-      .def_property(
           "gravity", [](const VehicleLimits& l) { return l.gravity; },
           [](VehicleLimits& l, const py::handle& v) { SetLimit(&l, "gravity", v); })
       .def(py::pickle(&pickle_state::LimitsState, &pickle_state::LimitsFromState))
@@ -133,18 +124,17 @@ void BindLimits(py::module_& m) {
           axes(*l.max_jerk);
         else
           s << "None";
-        const auto optional = [&s](const char* name, const std::optional<double>& v) {
-          if (v) s << ", " << name << "=" << *v;
-        };
-        optional("max_speed", l.max_speed);
-        optional("max_acceleration_norm", l.max_acceleration_norm);
-        optional("max_thrust", l.max_thrust);
-        optional("min_thrust", l.min_thrust);
-        optional("max_tilt", l.max_tilt);
-        optional("max_acceleration_change", l.max_acceleration_change);
+        for (const auto& [name, field] : kOptionalLimits) {
+          if (l.*field) s << ", " << name << "=" << *(l.*field);
+        }
         s << ")";
         return s.str();
       });
+  for (const auto& [name, field] : kOptionalLimits) {
+    limits.def_property(
+        name, [field = field](const VehicleLimits& l) { return Optional(l.*field); },
+        [name = name](VehicleLimits& l, const py::handle& v) { SetLimit(&l, name, v); });
+  }
 }
 
 // Curve.
