@@ -17,6 +17,9 @@
 //   at a boundary where the tangent vanishes, b is fixed by the acceleration (acc = f'' b), or is a
 //   control of its own where the curvature vanishes too (nothing bounds it but its cell's rows),
 //   and P1 is free.
+// A run of tied pieces (TemporalDiscretization::tied): b = b0 + 2 sddot s on each, with b0 and
+// sddot carried across each joint by its continuity row from the knot before the run, which is a
+// control (read back as the grid value), and the P1 before it; the first P1 after the run follows.
 // Every other case (a rest cell next to a rest cell, a boundary without a given sddot or b, a joint
 // whose knot is not a positive mean) has no basis here, and the general solvers take the problem.
 
@@ -240,8 +243,28 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
     basis.scale.push_back(v.scale);
   };
   add_free_boundary(0);
+  const auto tied = [&](int i) { return i >= 0 && i < m && !d.tied.empty() && d.tied[static_cast<size_t>(i)] != 0; };
+  std::vector<Form> run_entry(static_cast<size_t>(m));  // the knot before a run, at its first piece
   for (int i = 0; i < m; ++i) {
+    if (tied(i)) {
+      if (i == 0 || i == m - 1) return std::nullopt;
+      if (!tied(i - 1)) {
+        const int g = d.GridIndex(i - 1, 2 * K);
+        const GridValue& v = d.grid[static_cast<size_t>(g)];
+        if (v.var < 0 || !(v.scale > 0.0)) return std::nullopt;
+        run_entry[static_cast<size_t>(i)] = Form::Control(basis.num_controls++, v.scale);
+        basis.middle.push_back(g);
+        basis.at_knot.push_back(1);
+        basis.scale.push_back(v.scale);
+      }
+      continue;
+    }
     for (int k = 0; k < K; ++k) {
+      if (k == 0 && tied(i - 1)) {
+        // The first P1 after a run follows from it (below).
+        if (shape(i, 0) != CellShape::kQuadratic || (i == m - 1 && K == 1)) return std::nullopt;
+        continue;
+      }
       if (shape(i, k) != CellShape::kQuadratic) {
         const int g = d.GridIndex(i, 2 * k + 1);
         const GridValue& mid = d.grid[static_cast<size_t>(g)];
@@ -281,7 +304,26 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   const auto P1 = [&](int i, int k) -> const Form* {
     return has_p1[static_cast<size_t>(i * K + k)] ? &p1[static_cast<size_t>(i * K + k)] : nullptr;
   };
+  // Across the joint after piece i, where b is `before_b` and sddot `before_sddot` before it:
+  // b after it (the shared value) and sddot after it (the joint's continuity row); false where
+  // the joint has no such row.
+  const auto across = [&](int i, const Form& before_b, const Form& before_sddot, Form* after_b, Form* after_sddot) {
+    const GridValue& g = grid(i, 2 * K);
+    const GridValue& next = grid(i + 1, 0);
+    if (g.var < 0 || next.var != g.var || !(g.scale > 0.0)) return false;
+    const double rho = next.scale / g.scale;
+    const Eigen::Vector3d f1a = problem.curve.Evaluate(i, 1.0, 1), f1b = problem.curve.Evaluate(i + 1, 0.0, 1);
+    const Eigen::Vector3d f2a = problem.curve.Evaluate(i, 1.0, 2), f2b = problem.curve.Evaluate(i + 1, 0.0, 2);
+    const double n2 = f1b.squaredNorm();
+    if (!(n2 > 0.0)) return false;
+    const double alpha = f1b.dot(f1a) / n2, beta = f1b.dot(f2a - rho * f2b) / n2;
+    *after_sddot = Combine(before_sddot, alpha, before_b, beta, &ok);
+    *after_b = Form();
+    ok = ok && after_b->Add(before_b, rho);
+    return true;
+  };
   for (int i = 0; i < m; ++i) {
+    if (tied(i)) continue;  // set with the piece before its run
     for (int k = 0; k <= K; ++k) {
       const GridValue& g = grid(i, 2 * k);
       Form& f = knot_at(i, k);
@@ -297,6 +339,34 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         continue;
       }
       if (piece_start) continue;  // a shared value at a joint: set with the previous piece's end
+      if (piece_end && tied(i + 1)) {
+        const Form* before = P1(i, K - 1);
+        if (before == nullptr) return std::nullopt;
+        f = run_entry[static_cast<size_t>(i + 1)];
+        Form b_end = f, sddot = Combine(f, 1.0 / len(i, K - 1), *before, -1.0 / len(i, K - 1), &ok);
+        int j = i + 1;
+        for (; tied(j); ++j) {
+          Form start, slope;
+          if (!across(j - 1, b_end, sddot, &start, &slope)) return std::nullopt;
+          const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(j)];
+          for (int e = 0; e <= K; ++e) {
+            knot_at(j, e) = Combine(start, 1.0, slope, 2.0 * edges[static_cast<size_t>(e)], &ok);
+          }
+          for (int e = 0; e < K; ++e) {
+            p1[static_cast<size_t>(j * K + e)] = Combine(knot_at(j, e), 0.5, knot_at(j, e + 1), 0.5, &ok);
+            has_p1[static_cast<size_t>(j * K + e)] = true;
+          }
+          b_end = knot_at(j, K);
+          sddot = slope;
+        }
+        // The first cell after the run: its knot and P1 = knot + L sddot.
+        Form start, slope;
+        if (j >= m || !across(j - 1, b_end, sddot, &start, &slope)) return std::nullopt;
+        knot_at(j, 0) = start;
+        p1[static_cast<size_t>(j * K)] = Combine(start, 1.0, slope, len(j, 0), &ok);
+        has_p1[static_cast<size_t>(j * K)] = true;
+        continue;
+      }
       if (piece_end) {
         // A joint without a stop (its value is a free variable shared with the next piece).
         if (i + 1 >= m) return std::nullopt;

@@ -223,6 +223,32 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
   }
 }
 
+// A tied piece gives up its own profile: without a jerk limit it is crossed at the speed it is
+// entered with, with one at the tangential acceleration it is entered with (its s-jerk 0). On a
+// piece of length l entered at v with acceleration a that costs at most about l / v times the
+// relative change a jerk or an acceleration would have made over it: T within 1e-4 of the straight
+// line's optimum at a share of 1e-3 (measured, temporal_test.cpp and jerk_limited_test.cpp).
+void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d) {
+  const PiecewiseCurve& curve = problem.curve;
+  const int m = curve.num_pieces();
+  d->tied.assign(static_cast<size_t>(m), 0);
+  if (m < 3 || problem.limits.max_acceleration_change) return;
+  std::vector<double> length(static_cast<size_t>(m));
+  for (int i = 0; i < m; ++i) length[static_cast<size_t>(i)] = PieceLengthEstimate(curve, i);
+  for (int i = 1; i + 1 < m; ++i) {
+    if (d->joints[static_cast<size_t>(i - 1)].type == JointType::kStop ||
+        d->joints[static_cast<size_t>(i)].type == JointType::kStop) {
+      continue;
+    }
+    const double neighbour = std::max(length[static_cast<size_t>(i - 1)], length[static_cast<size_t>(i + 1)]);
+    if (!(length[static_cast<size_t>(i)] <= kTiedPieceShare * neighbour)) continue;
+    // Its tangent must not vanish inside either (its values are scaled by it).
+    bool moving = true;
+    for (int k = 0; k <= 16 && moving; ++k) moving = curve.Evaluate(i, k / 16.0, 1).norm() > problem.zero_tangent_tolerance;
+    d->tied[static_cast<size_t>(i)] = moving ? 1 : 0;
+  }
+}
+
 // One grid value per grid point: a scaled free variable, a fixed value (boundary speeds, stops),
 // or a value shared with the previous piece at a smooth joint. Returns the tangent f'(k ds) at
 // every grid point, also used by the paper's velocity rows.
@@ -337,6 +363,13 @@ std::vector<Eigen::Vector3d> AssignGridValues(const TemporalProblem& problem, Te
         }
       } else if (k == K && i + 1 < m && d.joints[static_cast<size_t>(i)].type == JointType::kStop) {
         g = GridValue{};  // fixed 0: the vehicle stops at the kink
+      } else if (!limits.max_jerk && !d.tied.empty() && d.tied[static_cast<size_t>(i)]) {
+        // A tied piece: the speed it is entered with, all across it (b |f'|^2 constant).
+        const GridValue& first = d.grid[static_cast<size_t>(d.GridIndex(i, 0))];
+        const double ratio = grid_tangent[static_cast<size_t>(d.GridIndex(i, 0))].norm() /
+                             grid_tangent[static_cast<size_t>(d.GridIndex(i, k))].norm();
+        g = first;
+        g.scale = first.scale * ratio * ratio;
       } else {
         g.var = next_var++;
         g.scale = piece_scale[static_cast<size_t>(i)];
@@ -673,6 +706,7 @@ TemporalDiscretization internal::DiscretizeWithFreeBoundaries(const TemporalProb
   d.grid.resize(static_cast<size_t>(m) * static_cast<size_t>(K + 1));
 
   ClassifyJoints(problem, &d);
+  MarkTiedPieces(problem, &d);
   CheckBoundaryAccelerations(problem, &d);
   const std::vector<Eigen::Vector3d> grid_tangent = AssignGridValues(problem, &d, free);
   MakeCells(problem, &d);

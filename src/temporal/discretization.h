@@ -145,6 +145,11 @@ struct TemporalDiscretization {
   std::vector<double> var_upper;     // upper bound of each x (>= 0, may be +inf); x >= 0
   std::vector<LinearRow> rows;       // over x, constants folded into the bounds
   std::vector<JointInfo> joints;     // m - 1 entries
+  // Per piece, 1 where it is tied (MarkTiedPieces): an interior piece negligibly short next to a
+  // neighbour, between two joints without a stop. Without a jerk limit every grid value of it
+  // shares the variable of its first (a constant speed across it); with one, b is a single line in
+  // s over it, continuing the acceleration of the piece before (equality rows).
+  std::vector<char> tied;
   std::vector<CubicRow> cubic_rows;  // JerkRows::kExact only; <= 1 each
   std::vector<ConeRow> cone_rows;    // the quadrotor's norm limits (VehicleLimits)
   // Jerk-limited mode (DiscretizeJerkLimited): the grid is the half grid, cells_per_piece = 2 K

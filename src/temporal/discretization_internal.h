@@ -213,6 +213,16 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
                         const std::string& field, double scale, int* next_var);
 // The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
 void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
+// A piece at most this share of the longer of its two neighbours' lengths is tied (see
+// TemporalDiscretization::tied). Its K cells are then ~1e3 times shorter than theirs and b ~1e6
+// times larger; the acceleration rows confined b's changes across it to a slab of relative width
+// ~length share, and the conic solvers stalled there: a 2 m line in pieces of 1 m, 0.1 um and 1 m
+// had no answer without a jerk limit, and with one a 0.1 mm middle piece none at K = 50, a 1 mm
+// one none at K >= 100 (see MarkTiedPieces for what the tie gives up).
+inline constexpr double kTiedPieceShare = 2e-3;
+// Marks the tied pieces (d->tied, after the joints are classified). None where the problem limits
+// the acceleration's change between cells (a tied piece holds its acceleration constant).
+void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d);
 // One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
 // f'(k ds) at every grid point.
 // With `free` set, a boundary with a non-zero speed gets a free value instead of a fixed one,

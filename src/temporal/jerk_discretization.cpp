@@ -305,6 +305,7 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   }
   internal::ClassifyJoints(half, &d);
   StopWhereCurvatureJumps(problem, &d);
+  internal::MarkTiedPieces(problem, &d);
   internal::AssignGridValues(half, &d);
   internal::MakeCells(half, &d);
   internal::CheckBoundaryAccelerations(problem, &d);
@@ -402,6 +403,22 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
     c.row.Add(c.Half(j.joint, 2 * K), -c.ds * f1b.dot(f2a - r2 * f2b) / n2);
     c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0,
                  [&] { return "sddot continuity at joint " + std::to_string(j.joint); });
+  }
+  // ---- a tied piece's b is one line in s: each cell's middle value the mean of its ends (with
+  // the continuity rows above, one slope over the piece). Each row divided by its middle value's
+  // scale, so that it reads in x. ----
+  for (int i = 0; i < m; ++i) {
+    if (!d.tied[static_cast<size_t>(i)]) continue;
+    for (int k = 0; k < K; ++k) {
+      const int g = c.Half(i, 2 * k);
+      const double unit = 1.0 / d.grid[static_cast<size_t>(g + 1)].scale;
+      c.row.Add(g + 1, unit);
+      c.row.Add(g, -0.5 * unit);
+      c.row.Add(g + 2, -0.5 * unit);
+      c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
+        return "b linear on the tied piece " + std::to_string(i) + " at cell " + std::to_string(k);
+      });
+    }
   }
   AddBoundaryAcceleration(c, false);
   AddBoundaryAcceleration(c, true);

@@ -85,6 +85,9 @@ constexpr double kCoarseTolerance = 1e-3;
 // K = 50, instructions of the whole solve: 253 M with 1, 222 M with 2, 204 M with 3, 214 M with 4).
 constexpr int kGuessCoarsening = 3;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// How far above 1 an optimal answer's densely checked limit ratios may be (Finish): the property
+// sweep's tolerance on the same check.
+constexpr double kDenseLimitSlack = 1e-6;
 // The general path's sequential convex programme that stops before its tolerance (a failed convex
 // solve, or max_scp_iterations) answers only if its last step changed T by at most this share.
 constexpr double kUnsettledShare = 1e-2;
@@ -495,6 +498,24 @@ bool JerkLimitedSolve::SolveConvex(JerkRows rows, const std::vector<double>* lin
 }
 
 TemporalResult JerkLimitedSolve::Finish(TemporalResult r) const {
+  // Every row holds on whole cells, so the dense check along the answer's exact trajectory can only
+  // find rounding (~1e-12) above a limit. More means the answer is not what its rows say (b of
+  // ~1e14 on a piece of 1e-7 m, where rounding in b alone made a jerk of 1.7 x the limit): no
+  // answer rather than a false one.
+  if (r.status == TemporalStatus::kOptimal) {
+    const struct {
+      double ratio;
+      const char* name;
+    } checks[] = {{r.max_velocity_ratio, "velocity"}, {r.max_acceleration_ratio, "acceleration"}, {r.max_jerk_ratio, "jerk"}};
+    for (const auto& check : checks) {
+      if (!(check.ratio <= 1.0 + kDenseLimitSlack)) {
+        r.status = TemporalStatus::kNumericalError;
+        r.message = "the answer exceeds its " + std::string(check.name) + " limit by a factor " +
+                    std::to_string(check.ratio) + " between its rows (rounding: b spans too many orders of magnitude)";
+        break;
+      }
+    }
+  }
   r.solver = name_;
   r.jerk_limited = true;
   r.build_time_seconds = build_time_;
