@@ -38,10 +38,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The variable scale's cap over the squared speed the largest acceleration limit reaches over the
 // whole path (AssignGridValues). A squared speed along the path is at most sqrt(3) times that one
 // (the per-axis limits together allow sqrt(3) times the largest along the path), so a cap of 4
-// times it never takes effect where the velocity limit can bind. It had been 1e6: a 1.2 cm minimum-jerk piece under speed limits of about 500 m/s (it
-// reaches 0.8 m/s) had its unknowns near 1e-6, and both the structured path and the conic solver
-// failed ("no step keeps the iterate inside the cones"; the property sweep, seed 3, problem 9450);
-// now the structured path answers in 11 iterations, T within 1e-9 of Ipopt's.
+// times it never takes effect where the velocity limit can bind. It had been 1e6: a 1.2 cm minimum-jerk piece under
+// speed limits of about 500 m/s (it reaches 0.8 m/s) had its unknowns near 1e-6, and both the structured path and the
+// conic solver failed ("no step keeps the iterate inside the cones"; the property sweep, seed 3, problem 9450); now the
+// structured path answers in 11 iterations, T within 1e-9 of Ipopt's.
 constexpr double kUnreachableSpeedShare = 4;
 
 }  // namespace
@@ -244,7 +244,9 @@ void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d) {
     if (!(length[static_cast<size_t>(i)] <= kTiedPieceShare * neighbour)) continue;
     // Its tangent must not vanish inside either (its values are scaled by it).
     bool moving = true;
-    for (int k = 0; k <= 16 && moving; ++k) moving = curve.Evaluate(i, k / 16.0, 1).norm() > problem.zero_tangent_tolerance;
+    for (int k = 0; k <= 16 && moving; ++k) {
+      moving = curve.Evaluate(i, k / 16.0, 1).norm() > problem.zero_tangent_tolerance;
+    }
     d->tied[static_cast<size_t>(i)] = moving ? 1 : 0;
   }
 }

@@ -139,12 +139,12 @@ struct TemporalDiscretization {
   // the two sides of the rho cone t * 1 >= ||a||^2 in the SOCP (see socp_backend.cpp). The median,
   // not a root-sum-square, so that cells near a vanishing tangent (unbounded caps) do not set it.
   double acceleration_norm_scale = 1.0;
-  int num_vars = 0;                  // size of x
-  std::vector<GridValue> grid;       // m (K + 1) values; piece i, point k at i (K + 1) + k
-  std::vector<Cell> cells;           // m K cells in path order
-  std::vector<double> var_upper;     // upper bound of each x (>= 0, may be +inf); x >= 0
-  std::vector<LinearRow> rows;       // over x, constants folded into the bounds
-  std::vector<JointInfo> joints;     // m - 1 entries
+  int num_vars = 0;               // size of x
+  std::vector<GridValue> grid;    // m (K + 1) values; piece i, point k at i (K + 1) + k
+  std::vector<Cell> cells;        // m K cells in path order
+  std::vector<double> var_upper;  // upper bound of each x (>= 0, may be +inf); x >= 0
+  std::vector<LinearRow> rows;    // over x, constants folded into the bounds
+  std::vector<JointInfo> joints;  // m - 1 entries
   // Per piece, 1 where it is tied (MarkTiedPieces): an interior piece negligibly short next to a
   // neighbour, between two joints without a stop. Without a jerk limit every grid value of it
   // shares the variable of its first (a constant speed across it); with one, b is a single line in

@@ -415,9 +415,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
       c.row.Add(g + 1, unit);
       c.row.Add(g, -0.5 * unit);
       c.row.Add(g + 2, -0.5 * unit);
-      c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0, [&] {
-        return "b linear on the tied piece " + std::to_string(i) + " at cell " + std::to_string(k);
-      });
+      c.row.Finish(LinearRow::Kind::kContinuity, 0.0, 0.0,
+                   [&] { return "b linear on the tied piece " + std::to_string(i) + " at cell " + std::to_string(k); });
     }
   }
   AddBoundaryAcceleration(c, false);

@@ -506,7 +506,8 @@ TemporalResult JerkLimitedSolve::Finish(TemporalResult r) const {
     const struct {
       double ratio;
       const char* name;
-    } checks[] = {{r.max_velocity_ratio, "velocity"}, {r.max_acceleration_ratio, "acceleration"}, {r.max_jerk_ratio, "jerk"}};
+    } checks[] = {
+        {r.max_velocity_ratio, "velocity"}, {r.max_acceleration_ratio, "acceleration"}, {r.max_jerk_ratio, "jerk"}};
     for (const auto& check : checks) {
       if (!(check.ratio <= 1.0 + kDenseLimitSlack)) {
         r.status = TemporalStatus::kNumericalError;

@@ -26,25 +26,9 @@
 namespace timeopt {
 namespace {
 
+using test_support::SCurveTime;
 using test_support::Segment;
 using ::testing::HasSubstr;
-
-// Rest-to-rest time along a line of length L with speed, acceleration and jerk limits v, a, j
-// (the S-curve): each half accelerates to a peak speed vp and the rest cruises. Accelerating to
-// vp takes vp / a + a / j and covers vp (vp / a + a / j) / 2 when vp >= a^2 / j (a is reached),
-// else 2 sqrt(vp / j) covering vp sqrt(vp / j).
-double SCurveTime(double L, double v, double a, double j) {
-  const auto accel_time = [&](double vp) { return vp >= a * a / j ? vp / a + a / j : 2.0 * std::sqrt(vp / j); };
-  const auto accel_distance = [&](double vp) { return 0.5 * vp * accel_time(vp); };
-  if (2.0 * accel_distance(v) <= L) return (L - 2.0 * accel_distance(v)) / v + 2.0 * accel_time(v);
-  // v is not reached: the peak speed where the two halves meet (accel_distance is increasing).
-  double lo = 0.0, hi = v;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (2.0 * accel_distance(mid) < L ? lo : hi) = mid;
-  }
-  return 2.0 * accel_time(0.5 * (lo + hi));
-}
 
 TemporalProblem JerkLine(const Eigen::Vector3d& to, double v, double a, double j, int K) {
   TemporalProblem p;
