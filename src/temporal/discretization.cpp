@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -223,32 +225,124 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
   }
 }
 
-// A tied piece gives up its own profile: without a jerk limit it is crossed at the speed it is
-// entered with, with one at the tangential acceleration it is entered with (its s-jerk 0). On a
-// piece of length l entered at v with acceleration a that costs at most about l / v times the
-// relative change a jerk or an acceleration would have made over it: T within 1e-4 of the straight
-// line's optimum at a share of 1e-3 (measured, temporal_test.cpp and jerk_limited_test.cpp).
-void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d) {
+namespace {
+
+// The pieces that would be tied (TemporalDiscretization::tied) but for rounding: interior, between
+// joints that are not stops, at most kTiedPieceShare of the curve's length, the tangent
+// nowhere vanishing; their lengths in `length` (all pieces), and with a jerk limit the length
+// below which rounding in b makes no profile on a piece trustworthy in `rounding_length`. With a
+// jerk limit, a piece of length l carries b ~ (v / l)^2 per unit s, and rounding in b (eps b per
+// value) makes a jerk of the order of eps v^3 (2 K)^2 / l^2 along its cells of 1 / (2 K): where
+// that is above kJerkRoundingRatio times the jerk limit. v: the fastest speed the limits and the
+// path allow.
+std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vector<JointInfo>& joints,
+                                std::vector<double>* length, double* rounding_length) {
   const PiecewiseCurve& curve = problem.curve;
   const int m = curve.num_pieces();
-  d->tied.assign(static_cast<size_t>(m), 0);
-  if (m < 3 || problem.limits.max_acceleration_change) return;
-  std::vector<double> length(static_cast<size_t>(m));
-  for (int i = 0; i < m; ++i) length[static_cast<size_t>(i)] = PieceLengthEstimate(curve, i);
+  std::vector<char> candidate(static_cast<size_t>(m), 0);
+  *rounding_length = 0.0;
+  length->assign(static_cast<size_t>(m), 0.0);
+  if (m < 3 || problem.limits.max_acceleration_change) return candidate;
+  double path = 0.0;
+  for (int i = 0; i < m; ++i) {
+    (*length)[static_cast<size_t>(i)] = PieceLengthEstimate(curve, i);
+    path += (*length)[static_cast<size_t>(i)];
+  }
+  const TemporalLimits& limits = problem.limits;
+  if (limits.max_jerk) {
+    double v = 0.0, a = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::isfinite(limits.max_velocity(axis))) v = std::max(v, limits.max_velocity(axis));
+      if (std::isfinite(limits.max_acceleration(axis))) a = std::max(a, limits.max_acceleration(axis));
+    }
+    if (limits.max_speed) v = std::max(v, *limits.max_speed);
+    if (limits.max_acceleration_norm) a = std::max(a, *limits.max_acceleration_norm);
+    const double boundary =
+        std::max(problem.boundary.start_velocity.squaredNorm(), problem.boundary.end_velocity.squaredNorm());
+    const double reach = std::sqrt(boundary + 2.0 * a * path);
+    if (a > 0.0) v = v > 0.0 ? std::min(v, reach) : reach;
+    const double cells = 2.0 * problem.cells_per_piece, j = limits.max_jerk->minCoeff();
+    *rounding_length =
+        std::sqrt(std::numeric_limits<double>::epsilon() * v * v * v * cells * cells / (kJerkRoundingRatio * j));
+  }
   for (int i = 1; i + 1 < m; ++i) {
-    if (d->joints[static_cast<size_t>(i - 1)].type == JointType::kStop ||
-        d->joints[static_cast<size_t>(i)].type == JointType::kStop) {
+    if (joints[static_cast<size_t>(i - 1)].type == JointType::kStop ||
+        joints[static_cast<size_t>(i)].type == JointType::kStop) {
       continue;
     }
-    const double neighbour = std::max(length[static_cast<size_t>(i - 1)], length[static_cast<size_t>(i + 1)]);
-    if (!(length[static_cast<size_t>(i)] <= kTiedPieceShare * neighbour)) continue;
+    if (!((*length)[static_cast<size_t>(i)] <= kTiedPieceShare * path)) continue;
     // Its tangent must not vanish inside either (its values are scaled by it).
     bool moving = true;
     for (int k = 0; k <= 16 && moving; ++k) {
       moving = curve.Evaluate(i, k / 16.0, 1).norm() > problem.zero_tangent_tolerance;
     }
-    d->tied[static_cast<size_t>(i)] = moving ? 1 : 0;
+    candidate[static_cast<size_t>(i)] = moving ? 1 : 0;
   }
+  return candidate;
+}
+
+}  // namespace
+
+// A tied piece gives up its own profile: without a jerk limit it is crossed at the speed it is
+// entered with, with one at the tangential acceleration it is entered with (its s-jerk 0). On a
+// piece of length l entered at v with acceleration a that costs at most about l / v times the
+// relative change a jerk or an acceleration would have made over it: T within 1e-4 of the straight
+// line's optimum at a share of 2e-3 (measured, reliability_test.cpp).
+void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d) {
+  std::vector<double> length;
+  double rounding_length = 0.0;
+  d->tied = TieCandidates(problem, d->joints, &length, &rounding_length);
+  for (size_t i = 0; i < d->tied.size(); ++i) {
+    if (d->tied[i] && !(length[i] > rounding_length)) d->tied[i] = 0;
+  }
+}
+
+std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& problem,
+                                                        const TemporalProfile& profile) {
+  if (!problem.limits.max_jerk || profile.num_pieces() != problem.curve.num_pieces()) return std::nullopt;
+  TemporalDiscretization d;
+  ClassifyJoints(problem, &d);
+  std::vector<double> length;
+  double rounding_length = 0.0;
+  const std::vector<char> candidate = TieCandidates(problem, d.joints, &length, &rounding_length);
+  double path = 0.0;
+  for (double l : length) path += l;
+  const double cells = 2.0 * problem.cells_per_piece, j = problem.limits.max_jerk->minCoeff();
+  for (size_t i = 0; i < candidate.size(); ++i) {
+    if (!candidate[i] || !(length[i] > rounding_length)) continue;
+    const int piece = static_cast<int>(i);
+    const double v = std::max(profile.AtS(piece, 0.0).sdot * problem.curve.Evaluate(piece, 0.0, 1).norm(),
+                              profile.AtS(piece, 1.0).sdot * problem.curve.Evaluate(piece, 1.0, 1).norm());
+    const double ratio =
+        std::numeric_limits<double>::epsilon() * v * v * v * cells * cells / (length[i] * length[i] * j);
+    if (!(ratio > kTiedRoundingCheck)) continue;
+    std::ostringstream why;
+    why << "piece " << i << " (" << length[i] / path << " of the curve's length) is too short for a jerk-limited "
+        << "profile at K = " << problem.cells_per_piece
+        << " at the speed it is crossed: rounding in its b could move its jerk rows; merge it into a neighbour, or use "
+           "a smaller K";
+    return why.str();
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem) {
+  if (!problem.limits.max_jerk) return std::nullopt;
+  TemporalDiscretization d;
+  ClassifyJoints(problem, &d);
+  std::vector<double> length;
+  double rounding_length = 0.0;
+  const std::vector<char> candidate = TieCandidates(problem, d.joints, &length, &rounding_length);
+  for (size_t i = 0; i < candidate.size(); ++i) {
+    if (!candidate[i] || length[i] > rounding_length) continue;
+    std::ostringstream why;
+    why << "piece " << i << " is " << length[i] << " m long between pieces of " << length[i - 1] << " and "
+        << length[i + 1] << " m: too short for a jerk-limited profile at K = " << problem.cells_per_piece
+        << " (rounding in its b would exceed the jerk limit below about " << rounding_length
+        << " m); merge it into a neighbour, or use a smaller K";
+    return why.str();
+  }
+  return std::nullopt;
 }
 
 // One grid value per grid point: a scaled free variable, a fixed value (boundary speeds, stops),

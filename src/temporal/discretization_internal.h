@@ -213,16 +213,37 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
                         const std::string& field, double scale, int* next_var);
 // The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
 void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
-// A piece at most this share of the longer of its two neighbours' lengths is tied (see
-// TemporalDiscretization::tied). Its K cells are then ~1e3 times shorter than theirs and b ~1e6
-// times larger; the acceleration rows confined b's changes across it to a slab of relative width
-// ~length share, and the conic solvers stalled there: a 2 m line in pieces of 1 m, 0.1 um and 1 m
-// had no answer without a jerk limit, and with one a 0.1 mm middle piece none at K = 50, a 1 mm
-// one none at K >= 100 (see MarkTiedPieces for what the tie gives up).
+// A piece at most this share of the curve's length is tied (see TemporalDiscretization::tied):
+// its K cells are then ~1e3 times shorter than the others' and b on it ~1e6 times larger; the
+// acceleration rows confined b's changes across it to a slab of relative width ~its length share,
+// and the conic solvers stalled there: a 2 m line in pieces of 1 m, 0.1 um and 1 m had no answer
+// without a jerk limit, and with one a 0.1 mm middle piece none at K = 50, a 1 mm one none at
+// K >= 100 (see MarkTiedPieces for what the tie gives up).
 inline constexpr double kTiedPieceShare = 2e-3;
+// With a jerk limit, a piece whose rounding in b may make a jerk above this many times the limit
+// (estimated as in MarkTiedPieces) is not tied. On the 2 m line with a middle piece (v 4, a 3,
+// j 10) the estimate is 1.2-1.5 for 10 um at K = 200, 3 um at K = 50 and 1 um at K = 20, whose
+// answers hold the jerk limit, and 9-16 for 1 um at K = 50 and 3 um at K = 200, where rounding made
+// a jerk of 1.49 and 2.07 x the limit. (It overstates the noise: v is the fastest speed the limits
+// allow, 3.5 m/s there against the 1.5 m/s flown.)
+inline constexpr double kJerkRoundingRatio = 2.5;
+// The same estimate with the answer's own speed on a tied piece, above which the answer is not
+// taken (TiedPieceTooShortForItsSpeed). On a random quintic split around a short piece (v 2, a 2,
+// j 4, K = 100) answers were as without the piece up to 0.46 and then fell away: 0.50 was 0.57%
+// slower, 0.65 1.5%, and 3.3 um (above 0.59 by the limits' speed) 7.9%, all "optimal" with every
+// limit held (rounding had moved the rows, not broken them). On the 2 m line 0.67 was exact and
+// 0.92 broke the jerk limit.
+inline constexpr double kTiedRoundingCheck = 0.35;
 // Marks the tied pieces (d->tied, after the joints are classified). None where the problem limits
 // the acceleration's change between cells (a tied piece holds its acceleration constant).
 void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d);
+// With a jerk limit, the message refusing a piece that would be tied but is too short for any
+// jerk-limited profile on it at this K (rounding in its b), or none. A valid problem is assumed.
+std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem);
+// With a jerk limit, after a solve: the message for a tied piece crossed so fast that rounding in
+// its b could have moved its rows (the estimate of MarkTiedPieces with the answer's speed on it
+// above kTiedRoundingCheck), or none.
+std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& problem, const TemporalProfile& profile);
 // One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
 // f'(k ds) at every grid point.
 // With `free` set, a boundary with a non-zero speed gets a free value instead of a fixed one,

@@ -639,8 +639,7 @@ class IpoptTemporalSolver final : public TemporalSolver {
         return;
       case Ipopt::Maximum_CpuTime_Exceeded:
         result->status = TemporalStatus::kIterationLimit;
-        result->message =
-            "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_seconds) + " s) exceeded";
+        result->message = "Ipopt: CPU time limit (" + std::to_string(options_.max_solve_time_seconds) + " s) exceeded";
         return;
       default:
         result->status = TemporalStatus::kNumericalError;

@@ -508,7 +508,12 @@ TemporalResult JerkLimitedSolve::Finish(TemporalResult r) const {
       const char* name;
     } checks[] = {
         {r.max_velocity_ratio, "velocity"}, {r.max_acceleration_ratio, "acceleration"}, {r.max_jerk_ratio, "jerk"}};
+    if (std::optional<std::string> why = internal::TiedPieceTooShortForItsSpeed(problem_, r.profile)) {
+      r.status = TemporalStatus::kNumericalError;
+      r.message = *why;
+    }
     for (const auto& check : checks) {
+      if (r.status != TemporalStatus::kOptimal) break;
       if (!(check.ratio <= 1.0 + kDenseLimitSlack)) {
         r.status = TemporalStatus::kNumericalError;
         r.message = "the answer exceeds its " + std::string(check.name) + " limit by a factor " +

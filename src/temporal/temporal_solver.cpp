@@ -155,6 +155,25 @@ TemporalResult SolveInUnits(const TemporalProblem& problem, const Solve& solve, 
 }  // namespace
 
 TemporalResult TemporalSolver::Solve(const TemporalProblem& problem) {
+  if (problem.limits.max_jerk) {
+    // A piece too short for a jerk-limited profile in double precision: its answer could not be
+    // trusted (rounding made the rows too tight, and answers 9% slow passed as optimal), so none.
+    std::optional<std::string> too_short;
+    try {
+      problem.Validate();
+      too_short = internal::JerkPieceTooShort(problem);
+    } catch (const std::invalid_argument&) {
+      // reported by the solve below
+    }
+    if (too_short) {
+      TemporalResult refused;
+      refused.status = TemporalStatus::kInvalidInput;
+      refused.message = *too_short;
+      refused.solver = ToString(backend());
+      refused.jerk_limited = true;
+      return refused;
+    }
+  }
   TemporalResult result =
       problem.limits.max_jerk
           ? SolveInUnits(
