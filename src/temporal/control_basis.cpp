@@ -304,22 +304,31 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
   const auto P1 = [&](int i, int k) -> const Form* {
     return has_p1[static_cast<size_t>(i * K + k)] ? &p1[static_cast<size_t>(i * K + k)] : nullptr;
   };
-  // Across the joint after piece i, where b is `before_b` and sddot `before_sddot` before it:
-  // b after it (the shared value) and sddot after it (the joint's continuity row); false where
-  // the joint has no such row.
-  const auto across = [&](int i, const Form& before_b, const Form& before_sddot, Form* after_b, Form* after_sddot) {
+  // The continuity row of the joint after piece i, b+ = rho b- and sddot+ = alpha sddot- + beta b-
+  // (the header comment); false where the joint has no shared free value.
+  struct JointRow {
+    double rho = 1.0, alpha = 0.0, beta = 0.0;
+  };
+  const auto joint_row = [&](int i, JointRow* out) {
     const GridValue& g = grid(i, 2 * K);
     const GridValue& next = grid(i + 1, 0);
     if (g.var < 0 || next.var != g.var || !(g.scale > 0.0)) return false;
-    const double rho = next.scale / g.scale;
+    out->rho = next.scale / g.scale;
     const Eigen::Vector3d f1a = problem.curve.Evaluate(i, 1.0, 1), f1b = problem.curve.Evaluate(i + 1, 0.0, 1);
     const Eigen::Vector3d f2a = problem.curve.Evaluate(i, 1.0, 2), f2b = problem.curve.Evaluate(i + 1, 0.0, 2);
     const double n2 = f1b.squaredNorm();
     if (!(n2 > 0.0)) return false;
-    const double alpha = f1b.dot(f1a) / n2, beta = f1b.dot(f2a - rho * f2b) / n2;
-    *after_sddot = Combine(before_sddot, alpha, before_b, beta, &ok);
+    out->alpha = f1b.dot(f1a) / n2;
+    out->beta = f1b.dot(f2a - out->rho * f2b) / n2;
+    return true;
+  };
+  // Across the joint after piece i, where b is `before_b` and sddot `before_sddot` before it.
+  const auto across = [&](int i, const Form& before_b, const Form& before_sddot, Form* after_b, Form* after_sddot) {
+    JointRow row;
+    if (!joint_row(i, &row)) return false;
+    *after_sddot = Combine(before_sddot, row.alpha, before_b, row.beta, &ok);
     *after_b = Form();
-    ok = ok && after_b->Add(before_b, rho);
+    ok = ok && after_b->Add(before_b, row.rho);
     return true;
   };
   for (int i = 0; i < m; ++i) {
@@ -372,21 +381,15 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         if (i + 1 >= m) return std::nullopt;
         const Form* before = P1(i, K - 1);
         const Form* after = P1(i + 1, 0);
-        const GridValue& next = grid(i + 1, 0);
-        if (before == nullptr || after == nullptr || next.var != g.var || !(g.scale > 0.0)) return std::nullopt;
-        const double rho = next.scale / g.scale;
-        const Eigen::Vector3d f1a = problem.curve.Evaluate(i, 1.0, 1), f1b = problem.curve.Evaluate(i + 1, 0.0, 1);
-        const Eigen::Vector3d f2a = problem.curve.Evaluate(i, 1.0, 2), f2b = problem.curve.Evaluate(i + 1, 0.0, 2);
-        const double n2 = f1b.squaredNorm();
-        if (!(n2 > 0.0)) return std::nullopt;
-        const double alpha = f1b.dot(f1a) / n2, beta = f1b.dot(f2a - rho * f2b) / n2;
+        JointRow row;
+        if (before == nullptr || after == nullptr || !joint_row(i, &row)) return std::nullopt;
         const double la = len(i, K - 1), lb = len(i + 1, 0);
-        const double denominator = rho / lb + alpha / la + beta;
-        if (!(alpha > 0.0) || !(denominator > 0.0)) return std::nullopt;
-        f = Combine(*before, alpha / la / denominator, *after, 1.0 / lb / denominator, &ok);
+        const double denominator = row.rho / lb + row.alpha / la + row.beta;
+        if (!(row.alpha > 0.0) || !(denominator > 0.0)) return std::nullopt;
+        f = Combine(*before, row.alpha / la / denominator, *after, 1.0 / lb / denominator, &ok);
         Form& shared = knot_at(i + 1, 0);
         shared = Form();
-        ok = ok && shared.Add(f, rho);
+        ok = ok && shared.Add(f, row.rho);
         continue;
       }
       // An interior knot.

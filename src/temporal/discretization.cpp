@@ -235,6 +235,25 @@ namespace {
 // value) makes a jerk of the order of eps v^3 (2 K)^2 / l^2 along its cells of 1 / (2 K): where
 // that is above kJerkRoundingRatio times the jerk limit. v: the fastest speed the limits and the
 // path allow.
+// Whether an interior piece may be short enough to be tied, from the coefficients alone (no
+// evaluation; most curves end here): its chord |f(1) - f(0)| is at most its length, and every
+// length at most sum k |c_k|, the largest |f'|. Loose by 4 x, as PieceLengthEstimate is an estimate.
+bool MayHaveShortPiece(const PiecewiseCurve& curve) {
+  const int m = curve.num_pieces();
+  if (m < 3) return false;
+  double upper = 0.0, shortest_chord = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < m; ++i) {
+    const PolynomialPiece::Coefficients& c = curve.piece(i).coefficients();
+    Eigen::Vector3d chord = Eigen::Vector3d::Zero();
+    for (int k = 1; k < c.cols(); ++k) {
+      chord += c.col(k);
+      upper += k * c.col(k).norm();
+    }
+    if (i > 0 && i + 1 < m) shortest_chord = std::min(shortest_chord, chord.norm());
+  }
+  return !(shortest_chord > 4.0 * kTiedPieceShare * upper);
+}
+
 std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vector<JointInfo>& joints,
                                 std::vector<double>* length, double* rounding_length) {
   const PiecewiseCurve& curve = problem.curve;
@@ -242,7 +261,7 @@ std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vecto
   std::vector<char> candidate(static_cast<size_t>(m), 0);
   *rounding_length = 0.0;
   length->assign(static_cast<size_t>(m), 0.0);
-  if (m < 3 || problem.limits.max_acceleration_change) return candidate;
+  if (problem.limits.max_acceleration_change || !MayHaveShortPiece(curve)) return candidate;
   double path = 0.0;
   for (int i = 0; i < m; ++i) {
     (*length)[static_cast<size_t>(i)] = PieceLengthEstimate(curve, i);
@@ -299,7 +318,10 @@ void MarkTiedPieces(const TemporalProblem& problem, TemporalDiscretization* d) {
 
 std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& problem,
                                                         const TemporalProfile& profile) {
-  if (!problem.limits.max_jerk || profile.num_pieces() != problem.curve.num_pieces()) return std::nullopt;
+  if (!problem.limits.max_jerk || profile.num_pieces() != problem.curve.num_pieces() ||
+      !MayHaveShortPiece(problem.curve)) {
+    return std::nullopt;
+  }
   TemporalDiscretization d;
   ClassifyJoints(problem, &d);
   std::vector<double> length;
@@ -327,7 +349,7 @@ std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& p
 }
 
 std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem) {
-  if (!problem.limits.max_jerk) return std::nullopt;
+  if (!problem.limits.max_jerk || !MayHaveShortPiece(problem.curve)) return std::nullopt;
   TemporalDiscretization d;
   ClassifyJoints(problem, &d);
   std::vector<double> length;
