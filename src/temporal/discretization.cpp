@@ -227,14 +227,6 @@ void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out)
 
 namespace {
 
-// The pieces that would be tied (TemporalDiscretization::tied) but for rounding: interior, between
-// joints that are not stops, at most kTiedPieceShare of the curve's length, the tangent
-// nowhere vanishing; their lengths in `length` (all pieces), and with a jerk limit the length
-// below which rounding in b makes no profile on a piece trustworthy in `rounding_length`. With a
-// jerk limit, a piece of length l carries b ~ (v / l)^2 per unit s, and rounding in b (eps b per
-// value) makes a jerk of the order of eps v^3 (2 K)^2 / l^2 along its cells of 1 / (2 K): where
-// that is above kJerkRoundingRatio times the jerk limit. v: the fastest speed the limits and the
-// path allow.
 // Whether an interior piece may be short enough to be tied, from the coefficients alone (no
 // evaluation; most curves end here): its chord |f(1) - f(0)| is at most its length, and every
 // length at most sum k |c_k|, the largest |f'|. Loose by 4 x, as PieceLengthEstimate is an estimate.
@@ -254,6 +246,14 @@ bool MayHaveShortPiece(const PiecewiseCurve& curve) {
   return !(shortest_chord > 4.0 * kTiedPieceShare * upper);
 }
 
+// The pieces that would be tied (TemporalDiscretization::tied) but for rounding: interior, between
+// joints that are not stops, at most kTiedPieceShare of the longest piece within two of it, the
+// tangent nowhere vanishing; their lengths in `length` (all pieces), and with a jerk limit the length
+// below which rounding in b makes no profile on a piece trustworthy in `rounding_length`. With a
+// jerk limit, a piece of length l carries b ~ (v / l)^2 per unit s, and rounding in b (eps b per
+// value) makes a jerk of the order of eps v^3 (2 K)^2 / l^2 along its cells of 1 / (2 K): where
+// that is above kJerkRoundingRatio times the jerk limit. v: the fastest speed the limits and the
+// path allow.
 std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vector<JointInfo>& joints,
                                 std::vector<double>* length, double* rounding_length) {
   const PiecewiseCurve& curve = problem.curve;
@@ -289,7 +289,12 @@ std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vecto
         joints[static_cast<size_t>(i)].type == JointType::kStop) {
       continue;
     }
-    if (!((*length)[static_cast<size_t>(i)] <= kTiedPieceShare * path)) continue;
+    // Short against the longest piece within two of it (a run of short pieces ties as a whole).
+    double around = 0.0;
+    for (int n = std::max(0, i - 2); n <= std::min(m - 1, i + 2); ++n) {
+      if (n != i) around = std::max(around, (*length)[static_cast<size_t>(n)]);
+    }
+    if (!((*length)[static_cast<size_t>(i)] <= kTiedPieceShare * around)) continue;
     // Its tangent must not vanish inside either (its values are scaled by it).
     bool moving = true;
     for (int k = 0; k <= 16 && moving; ++k) {

@@ -213,8 +213,10 @@ GridValue BoundaryValue(const Eigen::Vector3d& velocity, const Eigen::Vector3d& 
                         const std::string& field, double scale, int* next_var);
 // The type of every joint between pieces (C1, G1 with its speed ratio, or a stop).
 void ClassifyJoints(const TemporalProblem& problem, TemporalDiscretization* out);
-// A piece at most this share of the curve's length is tied (see TemporalDiscretization::tied):
-// its K cells are then ~1e3 times shorter than the others' and b on it ~1e6 times larger; the
+// A piece at most this share of the longest piece within two of it is tied (see
+// TemporalDiscretization::tied; not of the whole curve: in a 127 m plan of 101 pieces that tied
+// pieces of 0.2 m, and the structured path failed on the plan). Its K cells are then ~1e3 times
+// shorter than its neighbours' and b on it ~1e6 times larger; the
 // acceleration rows confined b's changes across it to a slab of relative width ~its length share,
 // and the conic solvers stalled there: a 2 m line in pieces of 1 m, 0.1 um and 1 m had no answer
 // without a jerk limit, and with one a 0.1 mm middle piece none at K = 50, a 1 mm one none at
