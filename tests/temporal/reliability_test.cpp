@@ -247,8 +247,9 @@ TEST(Reliability, ALineWithATinyMiddlePieceIsTheStraightLineWithoutAJerkLimit) {
 
 TEST(Reliability, APieceTooShortForAJerkLimitedProfileIsRefusedNamingIt) {
   // A 1 um middle piece at K = 50: b is ~1e12 per unit s on it, and rounding in b alone makes
-  // jerks of the order of eps v^3 (2 K)^2 / l^2 (here ~70 x the limit by that estimate). Tied,
-  // its answer had a jerk of 1.49 x the limit along its exact trajectory and was called optimal;
+  // jerks of the order of eps v^3 (2 K)^2 / l^2 (~9 x the limit by that estimate with the
+  // limits' fastest speed, 3.5 m/s). Tied, its answer had a jerk of 1.49 x the limit along its
+  // exact trajectory and was called optimal;
   // untied, a curve with a 1e-7 m piece was "optimal" 8.7% above the same curve without it. Such
   // a piece is refused before solving, saying which and how long it would have to be; at K = 20
   // the same piece is solved (the estimate 1.5 x, below 2.5), and is the straight line.
