@@ -305,6 +305,13 @@ std::vector<char> TieCandidates(const TemporalProblem& problem, const std::vecto
   return candidate;
 }
 
+// TieCandidates of a problem whose joints are not classified yet (outside a discretization).
+std::vector<char> TieCandidates(const TemporalProblem& problem, std::vector<double>* length, double* rounding_length) {
+  TemporalDiscretization d;
+  ClassifyJoints(problem, &d);
+  return TieCandidates(problem, d.joints, length, rounding_length);
+}
+
 }  // namespace
 
 // A tied piece gives up its own profile: without a jerk limit it is crossed at the speed it is
@@ -327,11 +334,9 @@ std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& p
       !MayHaveShortPiece(problem.curve)) {
     return std::nullopt;
   }
-  TemporalDiscretization d;
-  ClassifyJoints(problem, &d);
   std::vector<double> length;
   double rounding_length = 0.0;
-  const std::vector<char> candidate = TieCandidates(problem, d.joints, &length, &rounding_length);
+  const std::vector<char> candidate = TieCandidates(problem, &length, &rounding_length);
   double path = 0.0;
   for (double l : length) path += l;
   const double cells = 2.0 * problem.cells_per_piece, j = problem.limits.max_jerk->minCoeff();
@@ -355,11 +360,9 @@ std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& p
 
 std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem) {
   if (!problem.limits.max_jerk || !MayHaveShortPiece(problem.curve)) return std::nullopt;
-  TemporalDiscretization d;
-  ClassifyJoints(problem, &d);
   std::vector<double> length;
   double rounding_length = 0.0;
-  const std::vector<char> candidate = TieCandidates(problem, d.joints, &length, &rounding_length);
+  const std::vector<char> candidate = TieCandidates(problem, &length, &rounding_length);
   for (size_t i = 0; i < candidate.size(); ++i) {
     if (!candidate[i] || length[i] > rounding_length) continue;
     std::ostringstream why;
