@@ -167,9 +167,10 @@ bool BasisMatchesGrid(const TemporalDiscretization& d, const ControlBasis& basis
     if (basis.at_knot[static_cast<size_t>(c)]) {
       add(g, 1.0);
     } else {
-      add(g, 2.0);
-      add(g - 1, -0.5);
-      add(g + 1, -0.5);
+      const std::array<double, 3>& w = basis.read[static_cast<size_t>(c)];
+      add(g - 1, w[0]);
+      add(g, w[1]);
+      add(g + 1, w[2]);
     }
     if (!ok) return false;
     const double scale = basis.scale[static_cast<size_t>(c)];
@@ -241,6 +242,7 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
     basis.middle.push_back(g);
     basis.at_knot.push_back(1);
     basis.scale.push_back(v.scale);
+    basis.read.push_back({0.0, 1.0, 0.0});
   };
   add_free_boundary(0);
   const auto tied = [&](int i) { return i >= 0 && i < m && !d.tied.empty() && d.tied[static_cast<size_t>(i)] != 0; };
@@ -256,6 +258,7 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         basis.middle.push_back(g);
         basis.at_knot.push_back(1);
         basis.scale.push_back(v.scale);
+        basis.read.push_back({0.0, 1.0, 0.0});
       }
       continue;
     }
@@ -263,6 +266,21 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
       if (k == 0 && tied(i - 1)) {
         // The first P1 after a run follows from it (below).
         if (shape(i, 0) != CellShape::kQuadratic || (i == m - 1 && K == 1)) return std::nullopt;
+        continue;
+      }
+      if (IsRampShape(shape(i, k))) {
+        // q's middle Bernstein coefficient, scaled as q at the middle (rho_m b_mid).
+        const int g = d.GridIndex(i, 2 * k + 1);
+        const GridValue& mid = d.grid[static_cast<size_t>(g)];
+        if (mid.var < 0 || !(mid.scale > 0.0)) return std::nullopt;
+        const RampFrame fr = RampFrameOf(d, i, k);
+        const double scale = mid.scale * fr.rho[1];
+        p1[static_cast<size_t>(i * K + k)] = Form::Control(basis.num_controls++, scale);
+        has_p1[static_cast<size_t>(i * K + k)] = true;
+        basis.middle.push_back(g);
+        basis.at_knot.push_back(0);
+        basis.scale.push_back(scale);
+        basis.read.push_back({-0.5 * fr.rho[0], 2.0 * fr.rho[1], -0.5 * fr.rho[2]});
         continue;
       }
       if (shape(i, k) != CellShape::kQuadratic) {
@@ -273,6 +291,7 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         basis.middle.push_back(g);
         basis.at_knot.push_back(1);  // read back as the grid value itself
         basis.scale.push_back(mid.scale);
+        basis.read.push_back({0.0, 1.0, 0.0});
         continue;
       }
       Form& f = p1[static_cast<size_t>(i * K + k)];
@@ -295,6 +314,7 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
       basis.middle.push_back(d.GridIndex(i, 2 * k + 1));
       basis.at_knot.push_back(0);
       basis.scale.push_back(mid.scale);
+      basis.read.push_back({-0.5, 2.0, -0.5});
     }
   }
   add_free_boundary(1);
@@ -407,6 +427,48 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         const double l1 = len(i, k - 1), l0 = len(i, k), denominator = 5.0 / (6.0 * l0) + 1.0 / l1;
         f = Combine(*P1(i, k - 1), 1.0 / l1 / denominator, alpha[static_cast<size_t>(i * K + k)],
                     1.0 / (6.0 * l0) / denominator, &ok);
+      } else if (IsRampShape(left) || IsRampShape(right)) {
+        // sddot on each side as lambda b + F (F a form of that cell's control): b = (F_right -
+        // F_left) / (lambda_left - lambda_right).
+        double lambda[2];
+        Form F[2];
+        const bool fits = [&] {
+          for (int side = 0; side < 2; ++side) {
+            const int cell = k - 1 + side;
+            const CellShape sh = shape(i, cell);
+            const bool at_end = side == 0;  // the knot is the left cell's end, the right cell's start
+            const double L = len(i, cell);
+            const Form* own = P1(i, cell);
+            if (sh == CellShape::kQuadratic) {
+              if (own == nullptr) return false;
+              lambda[side] = at_end ? 1.0 / L : -1.0 / L;
+              F[side] = Form();
+              ok = ok && F[side].Add(*own, at_end ? -1.0 / L : 1.0 / L);
+            } else if ((sh == CellShape::kRestStart && at_end) || (sh == CellShape::kRestEnd && !at_end)) {
+              // (5 b - alpha) / (6 L), braking towards a rest end.
+              const double sign = at_end ? 1.0 : -1.0;
+              lambda[side] = sign * 5.0 / (6.0 * L);
+              F[side] = Form();
+              ok = ok && F[side].Add(alpha[static_cast<size_t>(i * K + cell)], -sign / (6.0 * L));
+            } else if (IsRampShape(sh)) {
+              // eps w (4 Q + w (dq/du) / dw) / 6 with Q = rho b, dq/du = 2 (P1 - Q) at the start and
+              // 2 (Q - P1) at the end.
+              if (own == nullptr) return false;
+              const RampFrame fr = RampFrameOf(d, i, cell);
+              const int e = at_end ? 2 : 0;
+              const double w = fr.w[e], r = fr.rho[e], sign = at_end ? 1.0 : -1.0;
+              lambda[side] = fr.eps * w * r * (4.0 + sign * 2.0 * w / fr.dw) / 6.0;
+              F[side] = Form();
+              ok = ok && F[side].Add(*own, -sign * fr.eps * w * w / (3.0 * fr.dw));
+            } else {
+              return false;
+            }
+          }
+          return true;
+        }();
+        const double denominator = lambda[0] - lambda[1];
+        if (!fits || !(denominator > 0.0)) return std::nullopt;
+        f = Combine(F[1], 1.0 / denominator, F[0], -1.0 / denominator, &ok);
       } else {
         return std::nullopt;
       }
@@ -428,6 +490,15 @@ std::optional<ControlBasis> BuildControlBasis(const TemporalProblem& problem, co
         case CellShape::kRestEnd:
           ok = ok && middle.Add(alpha[static_cast<size_t>(i * K + k)], 1.0);
           break;
+        case CellShape::kRampStart:
+        case CellShape::kRampEnd: {
+          // b_mid = q(1/2) / rho_m, q(1/2) = (rho_0 b_0 + 2 P1 + rho_2 b_2) / 4.
+          const RampFrame fr = RampFrameOf(d, i, k);
+          const double m = 1.0 / fr.rho[1];
+          ok = ok && middle.Add(a, 0.25 * fr.rho[0] * m) && middle.Add(*P1(i, k), 0.5 * m) &&
+               middle.Add(b, 0.25 * fr.rho[2] * m);
+          break;
+        }
         case CellShape::kLinear:  // not a shape of the jerk-limited grid
           return std::nullopt;
       }

@@ -358,6 +358,25 @@ std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& p
   return std::nullopt;
 }
 
+std::optional<std::string> TiedPieceMayBeTooShort(const TemporalProblem& problem) {
+  if (!problem.limits.max_jerk || !MayHaveShortPiece(problem.curve)) return std::nullopt;
+  std::vector<double> length;
+  double rounding_length = 0.0;
+  const std::vector<char> candidate = TieCandidates(problem, &length, &rounding_length);
+  // The estimate goes as 1 / l^2: kTiedRoundingCheck with the limits' fastest speed is reached at
+  // this length.
+  const double check_length = rounding_length * std::sqrt(kJerkRoundingRatio / kTiedRoundingCheck);
+  for (size_t i = 0; i < candidate.size(); ++i) {
+    if (!candidate[i] || !(length[i] <= check_length)) continue;
+    std::ostringstream why;
+    why << "piece " << i << " (" << length[i]
+        << " m) may be too short for a jerk-limited profile at K = " << problem.cells_per_piece
+        << " at the speeds the limits allow: merge it into a neighbour, or use a smaller K";
+    return why.str();
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem) {
   if (!problem.limits.max_jerk || !MayHaveShortPiece(problem.curve)) return std::nullopt;
   std::vector<double> length;

@@ -122,10 +122,14 @@ struct ControlBasis {
   std::vector<int> middle;
   std::vector<char> at_knot;  // per control: 1 for such a boundary value
   std::vector<double> scale;  // per control: P1 (or the boundary b) = scale * y
+  // Per control of a cell's P1: the weights of b at its cell's three half-grid values in P1 (-1/2,
+  // 2, -1/2 on a regular cell; a ramp cell's P1 is q's, with the rho_j of its RampFrame).
+  std::vector<std::array<double, 3>> read;
   // Control c of the profile with b at every half-grid value.
   double FromGrid(int c, const std::vector<double>& b) const {
     const size_t g = static_cast<size_t>(middle[static_cast<size_t>(c)]);
-    const double value = at_knot[static_cast<size_t>(c)] ? b[g] : 0.5 * (4.0 * b[g] - b[g - 1] - b[g + 1]);
+    const std::array<double, 3>& w = read[static_cast<size_t>(c)];
+    const double value = at_knot[static_cast<size_t>(c)] ? b[g] : w[0] * b[g - 1] + w[1] * b[g] + w[2] * b[g + 1];
     return value / scale[static_cast<size_t>(c)];
   }
 };

@@ -69,6 +69,46 @@ inline double HalfPointS(const std::vector<double>& edges, int j) {
          0.5 * (j - 2 * k) * (edges[static_cast<size_t>(k) + 1] - edges[static_cast<size_t>(k)]);
 }
 
+// A ramp cell of the jerk-limited grid (CellShape::kRampStart / kRampEnd, temporal_profile.h): w at
+// its three half points (its ends and its middle in w), rho_j = 1 / w_j^4 so that q_j = rho_j b_j,
+// dw/du = w1 - w0 along the cell's coordinate u in [0, 1] (negative before a rest end), and eps =
+// +1 after a rest start, -1 before a rest end (sddot = eps w (4 q + w dq/dw) / 6).
+struct RampFrame {
+  double w[3] = {0.0, 0.0, 0.0};
+  double rho[3] = {1.0, 1.0, 1.0};
+  double dw = 0.0;
+  double eps = 1.0;
+};
+inline RampFrame RampFrameOf(CellShape shape, double s0, double s1) {
+  RampFrame f;
+  f.w[0] = TemporalProfile::RampW(shape, s0);
+  f.w[2] = TemporalProfile::RampW(shape, s1);
+  f.w[1] = 0.5 * (f.w[0] + f.w[2]);
+  for (int j = 0; j < 3; ++j) f.rho[j] = 1.0 / ((f.w[j] * f.w[j]) * (f.w[j] * f.w[j]));
+  f.dw = f.w[2] - f.w[0];
+  f.eps = shape == CellShape::kRampStart ? 1.0 : -1.0;
+  return f;
+}
+// The shape and frame of full cell k of piece i of a jerk-limited discretization.
+inline CellShape JerkCellShape(const TemporalDiscretization& d, int piece, int k) {
+  return d.shapes[static_cast<size_t>(piece * (d.cells_per_piece / 2) + k)];
+}
+inline RampFrame RampFrameOf(const TemporalDiscretization& d, int piece, int k) {
+  const std::vector<double>& e = d.cell_edges[static_cast<size_t>(piece)];
+  return RampFrameOf(JerkCellShape(d, piece, k), e[static_cast<size_t>(k)], e[static_cast<size_t>(k) + 1]);
+}
+// HalfPointS of a jerk-limited discretization, where a ramp cell's middle half point is its middle
+// in w.
+inline double HalfPointS(const TemporalDiscretization& d, int piece, int j) {
+  const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(piece)];
+  const int k = std::min(j / 2, static_cast<int>(edges.size()) - 2);
+  const CellShape shape = JerkCellShape(d, piece, k);
+  if (j == 2 * k + 1 && IsRampShape(shape)) {
+    return TemporalProfile::RampMiddleS(shape, edges[static_cast<size_t>(k)], edges[static_cast<size_t>(k) + 1]);
+  }
+  return HalfPointS(edges, j);
+}
+
 inline double Angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
@@ -246,6 +286,10 @@ std::optional<std::string> JerkPieceTooShort(const TemporalProblem& problem);
 // its b could have moved its rows (the estimate of MarkTiedPieces with the answer's speed on it
 // above kTiedRoundingCheck), or none.
 std::optional<std::string> TiedPieceTooShortForItsSpeed(const TemporalProblem& problem, const TemporalProfile& profile);
+// With a jerk limit, when a solve did not answer: the note for a tied piece short enough that the
+// estimate with the limits' fastest speed is above kTiedRoundingCheck (rounding in its b may be
+// why), or none.
+std::optional<std::string> TiedPieceMayBeTooShort(const TemporalProblem& problem);
 // One grid value per grid point (problem.cells_per_piece cells per piece); returns the tangent
 // f'(k ds) at every grid point.
 // With `free` set, a boundary with a non-zero speed gets a free value instead of a fixed one,
@@ -297,6 +341,15 @@ void AddQuadrotorAccelerationRows(const TemporalLimits& limits, const std::vecto
 // q(w) = alpha (1 - w) + b_far w with alpha its middle value and b_far the value g0 + rest_far (at
 // least the same floor). 56 bytes: a solve reads every template once or twice per round, and at
 // 80 bytes (w0, w1 and jmax stored) they were 0.7 MB of the 10/50 benchmark's working memory.
+// The linearization floor of a rest cell of length L (in s) from its piece's floor (LinearizationFloors,
+// in b): a rest cell's q is b at its far end over w^4, w = 1 there, where a ramp's q = b / s^(4/3) is
+// about the same all along the ramp; so the piece's floor, which bounds b, is L^(4/3) times that
+// in the rest cell's q. (The piece's floor itself held a rest cell of 4e-5 of the piece, whose b
+// was below it, to 0.8 of its jerk limit: the whole ramp after it started 10% slower.)
+inline double RestCellFloor(double piece_floor, double L) { return piece_floor * std::cbrt(L) * L; }
+// JerkRowTemplate::rest_far of a ramp cell's rows (linearized at the largest q = b / w^4 on the
+// cell, RampFrame).
+inline constexpr std::int8_t kRampTemplate = -2;
 struct JerkRowTemplate {
   int g0 = 0;
   std::int8_t rest_far = -1;

@@ -34,6 +34,17 @@ void AddCellAcceleration(JerkContext& c, int piece, int k, bool at_end, double c
     return;
   }
   const double* slope = at_end ? kSlopeAtEnd : kSlopeAtStart;
+  if (IsRampShape(shape)) {
+    // sddot = eps w (4 q + w q_w) / 6 at the end, q_w = (dq/du) / (dw/du) (RestPolys).
+    const RampFrame f = RampFrameOf(c.d, piece, k);
+    const int e = at_end ? 2 : 0;
+    const double w = f.w[e];
+    for (int j = 0; j < 3; ++j) {
+      const double q_here = j == e ? 1.0 : 0.0;
+      c.row.Add(g0 + j, coef * f.eps * w * f.rho[j] * (4.0 * q_here + w * slope[j] / f.dw) / 6.0);
+    }
+    return;
+  }
   for (int j = 0; j < 3; ++j) c.row.Add(g0 + j, coef * slope[j] / (2.0 * len));
 }
 
@@ -245,6 +256,49 @@ bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
       out->vel[a][j] = Multiply(Multiply(f1, f1), b);
       out->acc[a][j] = Sum(Multiply(f1, sddot[j]), Multiply(f2, b));
       out->jerk[a][j] = Sum(Sum(Multiply(f1, j1[j]), Multiply(f2, j2[j])), Multiply(f3, TimesPower(q[j], 6, 1.0)));
+    }
+  }
+  return true;
+}
+
+// RampPolys of ramp cell k of piece i (see RestPolys), or false when the composed polynomials do not
+// fit a SmallPoly. f^(n)(s(u)) with s = w^3 (after a rest start) or 1 - w^3 (before a rest end),
+// w = w0 + dw u: each derivative of the piece composed with that cubic by Horner's scheme.
+bool RampCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
+  const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(piece)][0].cols()) - 1;  // of f'
+  if (6 * std::max(degree1, 0) + 6 > internal::kMaxSmallPoly) return false;
+  const RampFrame f = RampFrameOf(c.d, piece, k);
+  out->ramp = true;
+  for (int j = 0; j < 3; ++j) out->rho[j] = f.rho[j];
+  const SmallPoly w = (SmallPoly(2) << f.w[0], f.dw).finished();
+  const SmallPoly w2 = Multiply(w, w), w3 = Multiply(w2, w), w4 = Multiply(w2, w2), w6 = Multiply(w3, w3);
+  const SmallPoly s_of_u = f.eps > 0.0 ? w3 : SmallPoly(Sum(Constant(1.0), -w3));
+  const auto composed = [&](int order, int axis) {
+    const auto& coefs = c.derivatives[static_cast<size_t>(piece)][static_cast<size_t>(order - 1)];
+    if (coefs.cols() == 0) return Constant(0.0);
+    SmallPoly r = Constant(coefs(axis, coefs.cols() - 1));
+    for (Eigen::Index i = coefs.cols() - 2; i >= 0; --i) r = Sum(Multiply(r, s_of_u), Constant(coefs(axis, i)));
+    return r;
+  };
+  // Per value: q = rho_j L_j, q_w = rho_j L_j' / dw, q_ww = rho_j L_j'' / dw^2.
+  SmallPoly q[3], qw[3], qww[3];
+  for (int j = 0; j < 3; ++j) {
+    q[j] = Basis(j) * f.rho[j];
+    qw[j] = BasisDerivative(j) * (f.rho[j] / f.dw);
+    qww[j] = Constant(kBasisSecond[j] * f.rho[j] / (f.dw * f.dw));
+    out->q[j] = q[j];
+  }
+  for (int a = 0; a < 3; ++a) {
+    const SmallPoly f1 = composed(1, a), f2 = composed(2, a), f3 = composed(3, a);
+    for (int j = 0; j < 3; ++j) {
+      const SmallPoly b = Multiply(w4, q[j]);
+      const SmallPoly four_q_wqw = Sum(q[j] * 4.0, Multiply(w, qw[j]));
+      const SmallPoly sddot = Multiply(w, four_q_wqw) * (f.eps / 6.0);
+      const SmallPoly j1 = Sum(Sum(q[j] * 4.0, Multiply(w, qw[j]) * 6.0), Multiply(w2, qww[j])) * (1.0 / 18.0);
+      const SmallPoly j2 = Multiply(w3, four_q_wqw) * (f.eps / 2.0);
+      out->vel[a][j] = Multiply(Multiply(f1, f1), b);
+      out->acc[a][j] = Sum(Multiply(f1, sddot), Multiply(f2, b));
+      out->jerk[a][j] = Sum(Sum(Multiply(f1, j1), Multiply(f2, j2)), Multiply(f3, Multiply(w6, q[j])));
     }
   }
   return true;
@@ -469,7 +523,7 @@ void AddJerkTemplates(JerkContext& c, int piece, int k, int g0, const SmallPoly 
     c.basis_size = size;
   }
   const SmallPoly(&bern_basis)[3] = rest != nullptr ? rest_bernstein : c.basis_bernstein;
-  const int parts = rest != nullptr ? kRestJerkParts : 1;
+  const int parts = rest != nullptr && !rest->ramp ? kRestJerkParts : 1;
   for (int part = 0; part < parts; ++part) {
     const double w0 = static_cast<double>(part) / parts, w1 = (part + 1.0) / parts;
     if (rest != nullptr) {
@@ -483,7 +537,8 @@ void AddJerkTemplates(JerkContext& c, int piece, int k, int g0, const SmallPoly 
         internal::JerkRowTemplate t;
         t.g0 = g0;
         if (rest != nullptr) {
-          t.rest_far = static_cast<std::int8_t>(RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
+          t.rest_far = static_cast<std::int8_t>(rest->ramp ? internal::kRampTemplate
+                                                           : RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)]));
           t.part = static_cast<std::int8_t>(part);
           t.parts = static_cast<std::int8_t>(parts);
         }
@@ -527,25 +582,33 @@ void AddLinearizedJerkRows(JerkContext& c, int piece, int k, int axis, int g0, c
       });
     }
   };
-  const int parts = rest != nullptr ? kRestJerkParts : kJerkSegments;
+  const int parts = rest != nullptr && !rest->ramp ? kRestJerkParts : kJerkSegments;
   for (int part = 0; part < parts; ++part) {
     const double u0 = static_cast<double>(part) / parts, u1 = (part + 1.0) / parts;
     double b = std::max(previous_b(u0), previous_b(u1));
-    if (rest != nullptr) {
+    if (rest != nullptr && rest->ramp) {
+      // The largest q = rho_j b_j on the cell (q >= b: the floor of b bounds q as well).
+      const double lq[3] = {rest->rho[0] * lb[0], rest->rho[1] * lb[1], rest->rho[2] * lb[2]};
+      b = internal::LinearizationPoint(lq, c.bbar_floors[static_cast<size_t>(piece)]);
+    } else if (rest != nullptr) {
       // A rest cell's q is linear: its largest value on the part is at an end of it.
       const double alpha = lb[kRestAlpha], far = lb[RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)])];
       b = std::max(alpha + (far - alpha) * u0, alpha + (far - alpha) * u1);
     }
     // The quadratic's vertex inside the part.
     const double c2 = 2.0 * (lb[0] - 2.0 * lb[1] + lb[2]), c1 = -3.0 * lb[0] + 4.0 * lb[1] - lb[2];
-    if (c2 < 0.0 && rest == nullptr) {
+    if (c2 < 0.0 && rest == nullptr) {  // (a ramp cell's largest q is above)
       const double vertex = -c1 / (2.0 * c2);
       if (vertex > u0 && vertex < u1) b = std::max(b, previous_b(vertex));
     }
     // Never linearize at b near 0: the tangent would be nearly vertical and its row badly
     // scaled (a floor of 1e-12 made the conic solver stall). Any b > 0 keeps the row
     // conservative; below the floor the rows only loosen.
-    b = std::max(b, c.bbar_floors[static_cast<size_t>(piece)]);
+    if (rest == nullptr) {
+      b = std::max(b, c.bbar_floors[static_cast<size_t>(piece)]);
+    } else if (!rest->ramp) {
+      b = std::max(b, internal::RestCellFloor(c.bbar_floors[static_cast<size_t>(piece)], c.Len(piece, k)));
+    }
     static_assert(kJerkSegments == 1, "LinearizationPoint is the one-part rule");
     const double kappa = jmax / (2.0 * b * std::sqrt(b));
     const double bound = 3.0 * jmax / (2.0 * std::sqrt(b));
@@ -579,6 +642,11 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     c.row.Add(g0 + 1, -2.0);
     c.row.Add(g0, 0.5);
     c.row.Add(g0 + 2, 0.5);
+  } else if (rest->ramp) {
+    // q >= 0 on the cell: its middle Bernstein coefficient, over rho_m.
+    c.row.Add(g0 + 1, -2.0);
+    c.row.Add(g0, 0.5 * rest->rho[0] / rest->rho[1]);
+    c.row.Add(g0 + 2, 0.5 * rest->rho[2] / rest->rho[1]);
   } else {
     c.row.Add(g0 + kRestAlpha, -1.0);  // q >= 0 on the cell: alpha >= 0 (b_far is)
   }

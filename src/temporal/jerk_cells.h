@@ -149,7 +149,16 @@ inline bool RestPoint(const JerkContext& c, int piece, bool end) {
 // rows bound it.
 // beta = 0 is a constant s-jerk from rest (the only rest shape before), exact on a line; beta < 0
 // lets the s-jerk ease off as the curvature terms grow.
+// A ramp cell (CellShape::kRampStart / kRampEnd; RampCellPolys) has the same form in its coordinate
+// u in [0, 1] along the cell, w = w0 + (w1 - w0) u: b = w^4 q(w), q quadratic through q_j = rho_j
+// b_j (RampFrame), so its polynomials are a rest cell's with q's Lagrange basis times rho_j, and
+//   sddot = eps w (4 q + w q_w) / 6,  P = f' (4 q + 6 w q_w + w^2 q_ww) / 18 + eps f'' w^3 (4 q + w
+//   q_w) / 2 + f''' w^6 q,
+// q_w = dq/dw; ramp is set and rho holds the frame's factors (the jerk rows are linearized at the
+// largest q on the whole cell).
 struct RestPolys {
+  bool ramp = false;
+  double rho[3] = {1.0, 1.0, 1.0};
   SmallPoly q[3];        // q per half-grid value of the cell (0 at the rest point's)
   SmallPoly vel[3][3];   // f'^2 w^4 q: v^2, [axis][value]
   SmallPoly acc[3][3];   // [axis][value]
@@ -160,6 +169,7 @@ struct RestPolys {
 void AddCellAcceleration(JerkContext& c, int piece, int k, bool at_end, double coef);
 void AddConstantJerkRestRows(JerkContext& c, int piece, int k);
 bool RestCellPolys(JerkContext& c, int piece, int k, RestPolys* out);
+bool RampCellPolys(JerkContext& c, int piece, int k, RestPolys* out);
 void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vector<double>* lin,
                  const RestPolys* rest);
 

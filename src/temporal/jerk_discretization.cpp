@@ -214,7 +214,7 @@ void ForEachRestCell(const TemporalDiscretization& d, F f) {
   for (int i = 0; i < d.num_pieces; ++i) {
     for (int k = 0; k < K; ++k) {
       const CellShape shape = d.shapes[static_cast<size_t>(i * K + k)];
-      if (shape == CellShape::kQuadratic) continue;
+      if (!IsRestShape(shape)) continue;
       const size_t g0 = static_cast<size_t>(d.GridIndex(i, 2 * k));
       f(g0 + kRestAlpha, g0 + static_cast<size_t>(RestFar(shape)));
     }
@@ -341,24 +341,46 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
     const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
+    // Ramp cells need the rest cells' polynomials (RestCellPolys: degree up to 10).
+    const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(i)][0].cols()) - 1;
+    int ramp[2] = {0, 0};
     d.cell_edges[static_cast<size_t>(i)] = CellEdges(K,
                                                      rest_start ? RestCellSize(problem, i, false, rest_end)
                                                      : i == 0   ? BrakeCellSize(problem, i, false, K)
                                                                 : RestSize(),
                                                      rest_end     ? RestCellSize(problem, i, true, rest_start)
                                                      : i == m - 1 ? BrakeCellSize(problem, i, true, K)
-                                                                  : RestSize());
+                                                                  : RestSize(),
+                                                     &ramp, 6 * std::max(degree1, 0) + 6 <= internal::kMaxSmallPoly);
+    for (int k = 1; k <= ramp[0]; ++k) d.shapes[static_cast<size_t>(i * K + k)] = CellShape::kRampStart;
+    for (int k = K - 1 - ramp[1]; k < K - 1; ++k) d.shapes[static_cast<size_t>(i * K + k)] = CellShape::kRampEnd;
     for (int k = 0; k < K; ++k) {
-      const double half = 0.5 * c.Len(i, k);
-      d.cells[static_cast<size_t>(2 * (i * K + k))].ds = half;
-      d.cells[static_cast<size_t>(2 * (i * K + k) + 1)].ds = half;
+      const CellShape shape = d.shapes[static_cast<size_t>(i * K + k)];
+      Cell& first = d.cells[static_cast<size_t>(2 * (i * K + k))];
+      Cell& second = d.cells[static_cast<size_t>(2 * (i * K + k) + 1)];
+      if (!IsRampShape(shape)) {
+        first.ds = second.ds = 0.5 * c.Len(i, k);
+        continue;
+      }
+      // A ramp cell's half cells meet at its middle in w; the time of each in the objective is
+      // weighted so that it is exact where q is constant (a constant s-jerk): 3 |dw| / sqrt(q) over
+      // a half cell [wa, wb] against 2 |s(wb) - s(wa)| / (sqrt(b_a) + sqrt(b_b)), b = w^4 q.
+      const double middle = TemporalProfile::RampMiddleS(shape, c.Start(i, k), c.Start(i, k) + c.Len(i, k));
+      first.ds = std::abs(middle - c.Start(i, k));
+      second.ds = std::abs(c.Start(i, k) + c.Len(i, k) - middle);
+      const internal::RampFrame f = internal::RampFrameOf(shape, c.Start(i, k), c.Start(i, k) + c.Len(i, k));
+      const auto weight = [](double wa, double wb) {
+        return 1.5 * (wa * wa + wb * wb) / (wa * wa + wa * wb + wb * wb);
+      };
+      first.time_weight = weight(f.w[0], f.w[1]);
+      second.time_weight = weight(f.w[1], f.w[2]);
     }
   }
   // Rest cells take 6 L / (sqrt(alpha) + sqrt(b_far)): the half cell between alpha (the middle
   // value) and b_far, of length L / 2, with weight 6; the one between the rest point and alpha with
   // weight 0 (RestPolys).
   for (size_t cell = 0; cell < d.shapes.size(); ++cell) {
-    if (d.shapes[cell] == CellShape::kQuadratic) continue;
+    if (!IsRestShape(d.shapes[cell])) continue;
     const bool start = d.shapes[cell] == CellShape::kRestStart;
     d.cells[2 * cell].time_weight = start ? 0.0 : 6.0;
     d.cells[2 * cell + 1].time_weight = start ? 6.0 : 0.0;
@@ -368,8 +390,12 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     for (int k = 0; k < K; ++k) {
       RestPolys rest;
-      if (d.shapes[static_cast<size_t>(i * K + k)] == CellShape::kQuadratic) {
+      const CellShape shape = d.shapes[static_cast<size_t>(i * K + k)];
+      if (shape == CellShape::kQuadratic) {
         AddCellRows(c, i, k, jerk_rows, linearization, nullptr);
+      } else if (IsRampShape(shape)) {
+        if (!RampCellPolys(c, i, k, &rest)) throw std::logic_error("a ramp cell on a piece of too high a degree");
+        AddCellRows(c, i, k, jerk_rows, linearization, &rest);
       } else if (RestCellPolys(c, i, k, &rest)) {
         AddCellRows(c, i, k, jerk_rows, linearization, &rest);
       } else {

@@ -16,6 +16,7 @@ struct RestSize {
   bool halved = false;
   bool curved = false;   // a constant s-jerk over the cell keeps less than kCurvedRestShare somewhere
   bool braking = false;  // not a rest cell: the first cell of a braking start (BrakeCellSize)
+  double ramp = 0.0;     // the ramp from rest before halving (RampLength), in s
 };
 // The rest cell at the start (end = false) or end of piece i (see jerk_grid.cpp).
 RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_to_rest);
@@ -23,6 +24,10 @@ RestSize RestCellSize(const TemporalProblem& p, int piece, bool end, bool rest_t
 RestSize BrakeCellSize(const TemporalProblem& p, int piece, bool end, int K);
 // The K + 1 cell edges of a piece in s, from 0 to 1: rest_start and rest_end first and last, each
 // followed by cells graded back to the nominal size, the rest uniform.
-std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize& rest_end);
+// ramp_cells (optional): how many cells after the rest cell at the start and before the one at the
+// end are ramp cells (CellShape::kRampStart / kRampEnd), uniform in w = s^(1/3) from the rest point
+// with the rest cell (see jerk_grid.cpp); ramp_degree_fits: whether the piece's degree allows them.
+std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize& rest_end,
+                              int (*ramp_cells)[2] = nullptr, bool ramp_degree_fits = false);
 
 }  // namespace timeopt::internal

@@ -115,7 +115,7 @@ void BoundByPointVelocity(const TemporalProblem& problem, TemporalDiscretization
       const size_t k = static_cast<size_t>(std::min(j / 2, K - 1));
       double& ub = d->var_upper[static_cast<size_t>(v.var)];
       const CellShape shape = d->shapes[static_cast<size_t>(i * K) + k];
-      if (shape != CellShape::kQuadratic && j % 2 == 1) {
+      if (IsRestShape(shape) && j % 2 == 1) {
         // A rest cell's middle value is q at its rest point, not b at a point: its bound is the
         // jerk there, |f'_axis| (4 / 18) q^1.5 / L^2 <= j_axis (the other terms vanish at rest).
         const double L = edges[k + 1] - edges[k];
@@ -128,7 +128,7 @@ void BoundByPointVelocity(const TemporalProblem& problem, TemporalDiscretization
         }
         continue;
       }
-      const double s = edges[k] + 0.5 * (j - 2 * static_cast<int>(k)) * (edges[k + 1] - edges[k]);
+      const double s = internal::HalfPointS(*d, i, j);
       const Eigen::Vector3d t = problem.curve.Evaluate(i, s, 1);
       if (problem.limits.max_speed && t.norm() > problem.zero_tangent_tolerance) {
         ub = std::min(ub, *problem.limits.max_speed * *problem.limits.max_speed / (t.squaredNorm() * v.scale));
@@ -237,10 +237,9 @@ void CapAtBrakingEnds(const TemporalProblem& p, const TemporalDiscretization& d,
       const double t = 0.5 * (lo + hi);
       return v0 + a0 * t + 0.5 * j * t * t;
     };
-    const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(piece)];
     for (int jh = 0; jh <= half; ++jh) {
       const int h = end ? half - jh : jh;
-      const double s = internal::HalfPointS(edges, h);
+      const double s = internal::HalfPointS(d, piece, h);
       const double distance = speed * (end ? 1.0 - s : s);
       const double cap = speed_at(distance) / speed;
       double& value = (*b)[static_cast<size_t>(d.GridIndex(piece, h))];
@@ -361,11 +360,10 @@ std::vector<double> JerkLimitedSolve::JerkFreeGuess(const TemporalDiscretization
   const int K = d.cells_per_piece / 2;  // d's cells (it has K half cells of each)
   x.assign(static_cast<size_t>(d.num_vars), 0.0);
   for (int i = 0; i < d.num_pieces; ++i) {
-    const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(i)];
     for (int j = 0; j <= 2 * K; ++j) {
       const GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, j))];
       if (g.var < 0) continue;
-      const double at = guess_cells * internal::HalfPointS(edges, j);
+      const double at = guess_cells * internal::HalfPointS(d, i, j);
       const int c = std::min(static_cast<int>(at), guess_cells - 1);
       const double w = at - c;
       const double b = (1.0 - w) * std::max(0.0, cd.GridB(cd.GridIndex(i, c), cx)) +
@@ -508,6 +506,9 @@ TemporalResult JerkLimitedSolve::Finish(TemporalResult r) const {
       r.status = TemporalStatus::kNumericalError;
       r.message = *why;
     }
+  } else if (r.status != TemporalStatus::kInfeasible) {
+    // No answer: say so where rounding on a short tied piece may be the cause.
+    if (std::optional<std::string> why = internal::TiedPieceMayBeTooShort(problem_)) r.message += "; " + *why;
   }
   const struct {
     double ratio;
@@ -675,9 +676,8 @@ std::vector<double> JerkLimitedSolve::CoarseStart(const TemporalDiscretization& 
   const int K = problem_.cells_per_piece;
   b.assign(d.grid.size(), 0.0);
   for (int i = 0; i < d.num_pieces; ++i) {
-    const std::vector<double>& edges = d.cell_edges[static_cast<size_t>(i)];
     for (int j = 0; j <= 2 * K; ++j) {
-      const double at = internal::HalfPointS(edges, j);
+      const double at = internal::HalfPointS(d, i, j);
       const GridValue& g = d.grid[static_cast<size_t>(d.GridIndex(i, j))];
       double value = g.fixed;
       if (g.var >= 0) {

@@ -69,11 +69,21 @@ class JerkCoefficients {
       const double lb[3] = {linearization_[g], linearization_[g + 1], linearization_[g + 2]};
       const double floor = floors_[static_cast<size_t>(internal::PieceOf(d_, t.g0))];
       double bbar = 0.0;
-      if (t.rest_far < 0) {
+      if (t.rest_far == internal::kRampTemplate) {
+        // A ramp cell's rows are in q = rho_j b_j: the largest q on the cell.
+        const int piece = internal::PieceOf(d_, t.g0);
+        const internal::RampFrame f = internal::RampFrameOf(d_, piece, (t.g0 - d_.GridIndex(piece, 0)) / 2);
+        const double lq[3] = {f.rho[0] * lb[0], f.rho[1] * lb[1], f.rho[2] * lb[2]};
+        bbar = internal::LinearizationPoint(lq, floor);
+      } else if (t.rest_far < 0) {
         bbar = internal::LinearizationPoint(lb, floor);
       } else {
         const double alpha = lb[1], far = lb[t.rest_far];
-        bbar = std::max({alpha + (far - alpha) * t.w0(), alpha + (far - alpha) * t.w1(), floor});
+        const int piece = internal::PieceOf(d_, t.g0);
+        const std::vector<double>& e = d_.cell_edges[static_cast<size_t>(piece)];
+        const size_t k = static_cast<size_t>((t.g0 - d_.GridIndex(piece, 0)) / 2);
+        bbar = std::max({alpha + (far - alpha) * t.w0(), alpha + (far - alpha) * t.w1(),
+                         internal::RestCellFloor(floor, e[k + 1] - e[k])});
       }
       root_ = 2.0 * std::sqrt(bbar) / 3.0;
       cb_ = 1.0 / (3.0 * bbar);

@@ -97,6 +97,20 @@ CellBounds BoundCell(const Trajectory& trajectory, int piece, int k) {
     const double c1 = (-3.0 * b0 + 4.0 * bm - b1) / L, c2 = 2.0 * (b0 - 2.0 * bm + b1) / (L * L);
     sdd = 0.5 * std::max(std::abs(c1), std::abs(c1 + 2.0 * c2 * L));
     sddd = std::abs(c2) * std::sqrt(std::max(bmax, 0.0));
+  } else if (IsRampShape(shape)) {
+    // b = w^4 q(w) with q quadratic in w through q_j = b_j / w_j^4 (temporal_profile.h): bounds from
+    // the largest w on the cell and q's Bernstein coefficients and slopes in w.
+    const double wa = TemporalProfile::RampW(shape, s0), wb = TemporalProfile::RampW(shape, s0 + L);
+    const double w = std::max(wa, wb), h = std::abs(wb - wa), wm = 0.5 * (wa + wb);
+    const double q0 = profile.half_b(piece, 2 * k) / (wa * wa * wa * wa);
+    const double qm = profile.half_b(piece, 2 * k + 1) / (wm * wm * wm * wm);
+    const double q1 = profile.half_b(piece, 2 * k + 2) / (wb * wb * wb * wb);
+    const double qmax = std::max({q0, 2.0 * qm - 0.5 * (q0 + q1), q1, 0.0});
+    const double c1 = (-3.0 * q0 + 4.0 * qm - q1) / h, c2 = 2.0 * (q0 - 2.0 * qm + q1) / (h * h);
+    const double slope = std::max(std::abs(c1), std::abs(c1 + 2.0 * c2 * h));
+    bmax = w * w * w * w * qmax;
+    sdd = w * (4.0 * qmax + w * slope) / 6.0;
+    sddd = std::sqrt(qmax) * (4.0 * qmax + 6.0 * w * slope + w * w * 2.0 * std::abs(c2)) / 18.0;
   } else {
     const bool start = shape == CellShape::kRestStart;
     const double bm = profile.half_b(piece, 2 * k + 1);

@@ -20,6 +20,10 @@ const char* ToString(CellShape shape) {
       return "rest_start";
     case CellShape::kRestEnd:
       return "rest_end";
+    case CellShape::kRampStart:
+      return "ramp_start";
+    case CellShape::kRampEnd:
+      return "ramp_end";
   }
   return "unknown";
 }
@@ -209,8 +213,51 @@ struct RestCell {
   }
 };
 
+// A ramp cell [s0, s0 + len] (see the header): with omega = |w - w0| the distance in w from the
+// cell's start along the path (w = w0 + eps omega, eps = +1 after a rest start, -1 before a rest
+// end), q is the quadratic cell of length |w1 - w0| in omega through q_j = b_j / w_j^4, and the
+// time is 3 times that cell's (dw/dt = eps sqrt(q) / 3).
+struct RampCell {
+  CellShape shape;
+  double s0, len, w0, w1, eps;
+  QuadraticCell q;
+  RampCell(CellShape shape_in, double s0_in, double len_in, double b0, double bm, double b1)
+      : shape(shape_in),
+        s0(s0_in),
+        len(len_in),
+        w0(TemporalProfile::RampW(shape_in, s0_in)),
+        w1(TemporalProfile::RampW(shape_in, s0_in + len_in)),
+        eps(shape_in == CellShape::kRampStart ? 1.0 : -1.0),
+        q(b0 / Pow4(w0), bm / Pow4(0.5 * (w0 + w1)), b1 / Pow4(w1), std::abs(w1 - w0)) {}
+  static double Pow4(double w) { return (w * w) * (w * w); }
+  double Omega(double sigma) const {
+    return std::clamp(std::abs(TemporalProfile::RampW(shape, s0 + std::clamp(sigma, 0.0, len)) - w0), 0.0, q.h);
+  }
+  // sigma (from the cell's start, in s) at omega.
+  double Sigma(double omega) const {
+    const double w = w0 + eps * omega;
+    const double s = shape == CellShape::kRampStart ? w * w * w : 1.0 - w * w * w;
+    return std::clamp(s - s0, 0.0, len);
+  }
+  double Time(double sigma) const { return 3.0 * q.Time(Omega(sigma)); }
+  double Duration() const { return 3.0 * q.Time(q.h); }
+  void State(double omega, TemporalProfile::Point* p) const {
+    const double w = w0 + eps * omega;
+    const double Q = q.B(omega), root = std::sqrt(Q);
+    const double qw = eps * q.Slope(omega), qww = 2.0 * q.c2;
+    p->sdot = w * w * root;
+    p->sddot = eps * w * (4.0 * Q + w * qw) / 6.0;
+    p->sdddot = root * (4.0 * Q + 6.0 * w * qw + w * w * qww) / 18.0;
+  }
+};
+
 // w^4 at a rest cell's middle in s (w^3 = 1/2).
 constexpr double kMiddleW4 = RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW * RestCell::kMiddleW;
+
+RampCell RampOf(const TemporalProfile& p, int piece, int k) {
+  return RampCell(p.shape(piece, k), p.CellStart(piece, k), p.CellLength(piece, k), p.half_b(piece, 2 * k),
+                  p.half_b(piece, 2 * k + 1), p.half_b(piece, 2 * k + 2));
+}
 
 std::string CellName(size_t piece, int k) { return "cell " + std::to_string(k) + " of piece " + std::to_string(piece); }
 
@@ -280,6 +327,15 @@ double TemporalProfile::RestMiddle(double alpha, double b_far) {
   return kMiddleW4 * (alpha * (1.0 - RestCell::kMiddleW) + b_far * RestCell::kMiddleW);
 }
 
+double TemporalProfile::RampW(CellShape shape, double s) {
+  return std::cbrt(std::max(0.0, shape == CellShape::kRampEnd ? 1.0 - s : s));
+}
+
+double TemporalProfile::RampMiddleS(CellShape shape, double s0, double s1) {
+  const double w = 0.5 * (RampW(shape, s0) + RampW(shape, s1));
+  return shape == CellShape::kRampEnd ? 1.0 - w * w * w : w * w * w;
+}
+
 TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> half_b,
                                              std::vector<std::vector<CellShape>> shapes,
                                              std::vector<std::vector<double>> cell_edges) {
@@ -338,8 +394,8 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
       switch (shapes[i][k]) {
         case CellShape::kLinear:
           throw std::invalid_argument(where + CellName(i, k) +
-                                      " is linear; a jerk-limited profile takes quadratic and "
-                                      "rest cells");
+                                      " is linear; a jerk-limited profile takes quadratic, "
+                                      "rest and ramp cells");
         case CellShape::kRestStart:
         case CellShape::kRestEnd: {
           const bool start = shapes[i][k] == CellShape::kRestStart;
@@ -356,6 +412,28 @@ TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> ha
                                         "end (q at the rest point >= 0)");
           }
           duration = cell.Duration();
+          break;
+        }
+        case CellShape::kRampStart:
+        case CellShape::kRampEnd: {
+          const bool start = shapes[i][k] == CellShape::kRampStart;
+          const double s0 = p.CellStart(static_cast<int>(i), k);
+          if ((start && !(s0 > 0.0)) || (!start && !(s0 + ds < 1.0))) {
+            throw std::invalid_argument(where + CellName(i, k) + " is a ramp cell at its piece's " +
+                                        (start ? "start" : "end") + ": a ramp lies after a rest cell");
+          }
+          if (!(b0 > 0.0) || !(h[2 * k + 1] > 0.0) || !(b1 > 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) +
+                                        " is a ramp cell: expected b > 0 at its three half points");
+          }
+          const RampCell cell(shapes[i][k], s0, ds, b0, h[2 * k + 1], b1);
+          if (cell.q.VertexValue() < 0.0) {
+            throw std::invalid_argument(where + CellName(i, k) + ": the ramp cell's q = b / w^4 drops below 0 inside");
+          }
+          duration = cell.Duration();
+          if (!std::isfinite(duration) || !(duration > 0.0)) {
+            throw std::invalid_argument(where + CellName(i, k) + ": the ramp cell would take forever");
+          }
           break;
         }
         case CellShape::kQuadratic: {
@@ -452,6 +530,9 @@ double TemporalProfile::TimeInCell(int piece, int k, double sigma) const {
       const double one_minus_w = -std::expm1(std::log1p(-x) / 3.0);
       return RestCell(half_b_[piece][2 * k + 1], b_[piece][k], ds).TimeFrom(1.0 - one_minus_w, one_minus_w);
     }
+    case CellShape::kRampStart:
+    case CellShape::kRampEnd:
+      return RampOf(*this, piece, k).Time(sigma);
   }
   return 0.0;
 }
@@ -480,6 +561,12 @@ TemporalProfile::Point TemporalProfile::StateInCell(int piece, int k, double sig
     case CellShape::kRestEnd:
       RestCell(half_b_[piece][2 * k + 1], b_[piece][k], ds).State(false, std::cbrt((ds - sigma) / ds), &p);
       break;
+    case CellShape::kRampStart:
+    case CellShape::kRampEnd: {
+      const RampCell cell = RampOf(*this, piece, k);
+      cell.State(cell.Omega(sigma), &p);
+      break;
+    }
   }
   return p;
 }
@@ -566,6 +653,15 @@ TemporalProfile::Point TemporalProfile::AtTime(double t) const {
       const double one_minus_w = cell.OneMinusWAfterFar(tau), w = 1.0 - one_minus_w;
       p = StateInCell(piece, k, ds * one_minus_w * (1.0 + w + w * w));
       cell.State(false, w, &p);
+      return p;
+    }
+    case CellShape::kRampStart:
+    case CellShape::kRampEnd: {
+      // omega from the quadratic cell of q in w (a third of the time), then s from w.
+      const RampCell cell = RampOf(*this, piece, k);
+      const double omega = cell.q.Sigma(tau / 3.0, cell.q.Time(cell.q.h));
+      p = StateInCell(piece, k, cell.Sigma(omega));
+      cell.State(omega, &p);
       return p;
     }
   }

@@ -199,7 +199,8 @@ TEST(ControlBasis, EveryProfileOfTheControlsMeetsTheEqualityRows) {
 // free boundary value), exactly what the equality rows leave of the free values, so
 // num_controls + equalities = num_vars on every problem here (the equality rows are independent:
 // each fixes a different knot or rest-cell middle). The map y -> b is injective: FromGrid reads
-// y_c back from b (P1 = (4 b_mid - b0 - b2) / 2 on a regular cell, b itself at a free boundary),
+// y_c back from b (P1 = (4 b_mid - b0 - b2) / 2 on a regular cell, the same in q = rho b on a ramp
+// cell, b itself at a free boundary),
 // and the form of each control's own grid value has a non-zero coefficient on it. Tolerance of the
 // read-back: rounding of the forms' values, 1e-12 relative to the size of the terms FromGrid
 // combines (divided by the control's scale).
@@ -232,13 +233,26 @@ TEST(ControlBasis, SpansTheSameProfilesAsTheGrid) {
       ASSERT_GE(g, 0);
       ASSERT_LT(g, static_cast<int>(d.grid.size()));
       const size_t gs = static_cast<size_t>(g);
-      // y_c = P1 (or the boundary b) over the scale of the grid value it lives at.
-      EXPECT_EQ(basis.scale[cs], d.grid[gs].scale) << "control " << c;
+      // y_c = P1 (or the boundary b) over the scale of the grid value it lives at; a ramp cell's P1
+      // is q's, q = rho b (RampFrame), over rho_m times that scale.
+      const int piece = g / (d.cells_per_piece + 1), k = (g - d.GridIndex(piece, 0)) / 2;
+      const CellShape shape = d.shapes[static_cast<size_t>(piece * (d.cells_per_piece / 2) + k)];
+      double rho = 1.0;
+      if (!basis.at_knot[cs] && IsRampShape(shape)) {
+        const std::vector<double>& e = d.cell_edges[static_cast<size_t>(piece)];
+        const double w = 0.5 * (TemporalProfile::RampW(shape, e[static_cast<size_t>(k)]) +
+                                TemporalProfile::RampW(shape, e[static_cast<size_t>(k) + 1]));
+        rho = 1.0 / (w * w * w * w);
+      }
+      EXPECT_DOUBLE_EQ(basis.scale[cs], d.grid[gs].scale * rho) << "control " << c;  // rho to rounding
       const ControlForm& f = basis.grid[gs];
       ASSERT_LE(f.first, c) << "control " << c;
       ASSERT_LT(c, f.first + f.count) << "control " << c;
       EXPECT_NE(f.coef[static_cast<size_t>(c - f.first)], 0.0) << "control " << c;
-      const double terms = basis.at_knot[cs] ? size[gs] : 0.5 * (4.0 * size[gs] + size[gs - 1] + size[gs + 1]);
+      const std::array<double, 3>& w = basis.read[cs];
+      const double terms =
+          basis.at_knot[cs] ? size[gs]
+                            : std::abs(w[0]) * size[gs - 1] + std::abs(w[1]) * size[gs] + std::abs(w[2]) * size[gs + 1];
       EXPECT_NEAR(basis.FromGrid(c, b), y[cs], 1e-12 * terms / basis.scale[cs]) << "control " << c;
     }
   }

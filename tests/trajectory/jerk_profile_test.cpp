@@ -1,4 +1,4 @@
-// Jerk-limited temporal profiles (quadratic and rest cells) against truths written here
+// Jerk-limited temporal profiles (quadratic, rest and ramp cells) against truths written here
 // independently: cell times by tanh-sinh quadrature of 1 / sqrt(b) and the rest cells' closed form
 // 3 ds / sqrt(b), the time map by its inverse, the derivatives of s(t) by finite differences, and
 // the trajectory's jerk by finite differences of its acceleration.
@@ -195,8 +195,101 @@ TemporalProfile Mixed() {
              {CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kQuadratic, CellShape::kRestEnd}});
 }
 
+// One piece with ramp cells (S = 0.2 of it at each end, cells uniform in w = s^(1/3) from each rest
+// point: edges S / 27, 8 S / 27, S), a quadratic cell between them, and values whose q = b / w^4
+// rises and falls across the ramp cells; the rest cells keep a constant s-jerk.
+const double kRampS = 0.2;
+std::vector<double> RampedEdges() {
+  const double S = kRampS;
+  return {0.0, S / 27.0, 8.0 * S / 27.0, S, 1.0 - S, 1.0 - 8.0 * S / 27.0, 1.0 - S / 27.0, 1.0};
+}
+TemporalProfile Ramped() {
+  const double m = kConstantJerkMiddle;
+  using S = CellShape;
+  return TemporalProfile::JerkLimited(
+      Grid{{0.0, m * 0.05, 0.05, 0.2, 0.4, 0.7, 1.0, 1.3, 1.1, 0.8, 0.5, 0.15, 0.04, m * 0.04, 0.0}},
+      Shapes{{S::kRestStart, S::kRampStart, S::kRampStart, S::kQuadratic, S::kRampEnd, S::kRampEnd, S::kRestEnd}},
+      Grid{RampedEdges()});
+}
+
+// b(s) of a ramp cell [s0, s1] of the profile, written here from the definition in
+// temporal_profile.h: w = s^(1/3) (or (1 - s)^(1/3) before a rest end), q the quadratic in w
+// through q_j = b_j / w_j^4 at w0, (w0 + w1) / 2, w1 (Lagrange form), b = w^4 q(w).
+double RampB(bool start, double s0, double s1, double b0, double bm, double b1, double s) {
+  const auto w_of = [&](double x) { return std::cbrt(start ? x : 1.0 - x); };
+  const double w0 = w_of(s0), w1 = w_of(s1), wm = 0.5 * (w0 + w1), w = w_of(s);
+  const double q0 = b0 / std::pow(w0, 4), qm = bm / std::pow(wm, 4), q1 = b1 / std::pow(w1, 4);
+  const double q = q0 * (w - wm) * (w - w1) / ((w0 - wm) * (w0 - w1)) +
+                   qm * (w - w0) * (w - w1) / ((wm - w0) * (wm - w1)) +
+                   q1 * (w - w0) * (w - wm) / ((w1 - w0) * (w1 - wm));
+  return std::pow(w, 4) * q;
+}
+
+TEST(JerkProfile, RampCellTimesMatchQuadrature) {
+  const TemporalProfile profile = Ramped();
+  const std::vector<double> e = RampedEdges();
+  int checked = 0;
+  for (int k = 0; k < profile.cells_per_piece(); ++k) {
+    const CellShape shape = profile.shape(0, k);
+    if (!IsRampShape(shape)) continue;
+    const double b0 = profile.half_b(0, 2 * k), bm = profile.half_b(0, 2 * k + 1), b1 = profile.half_b(0, 2 * k + 2);
+    // b is smooth and positive on the cell: the quadrature of 1 / sqrt(b) in s converges to
+    // rounding (the two spacings agree to 1e-15).
+    const auto f = [&](double x, double) {
+      return 1.0 / std::sqrt(RampB(shape == CellShape::kRampStart, e[k], e[k + 1], b0, bm, b1, e[k] + x));
+    };
+    const double ds = e[k + 1] - e[k];
+    const double coarse = TanhSinh(f, ds, 1.0 / 64), fine = TanhSinh(f, ds, 1.0 / 128);
+    ASSERT_NEAR(coarse, fine, 1e-15 * fine);
+    // The profile's closed form (3 times a quadratic cell's time in w) against it: both a few ulps.
+    EXPECT_NEAR(profile.TimeAt(0, k + 1) - profile.TimeAt(0, k), fine, 1e-13 * fine) << "cell " << k;
+    // b at the middle half point is b at the middle in w.
+    const double w = 0.5 * (TemporalProfile::RampW(shape, e[k]) + TemporalProfile::RampW(shape, e[k + 1]));
+    const double s_mid = shape == CellShape::kRampStart ? w * w * w : 1.0 - w * w * w;
+    EXPECT_NEAR(TemporalProfile::RampMiddleS(shape, e[k], e[k + 1]), s_mid, 1e-15);
+    EXPECT_NEAR(profile.AtS(0, s_mid).sdot, std::sqrt(bm), 1e-13) << "cell " << k;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
+}
+
+// With q constant, the rest cell and the ramp cells after it are one constant s-jerk from rest:
+// s = w^3 with dw/dt = sqrt(q) / 3, so s = J t^3 / 6 with J = 2 q^1.5 / 9, exactly (the closed form
+// here, not the profile's formulas).
+TEST(JerkProfile, ConstantQIsOneConstantSJerkAcrossRestAndRampCells) {
+  const double q = 7.0, S = 0.3;
+  const double e1 = S / 64.0, e2 = 8.0 * S / 64.0, e3 = 27.0 * S / 64.0, e4 = S;  // w = 1/4 .. 1 of S^(1/3)
+  const auto b_at = [&](double s) { return std::pow(s, 4.0 / 3.0) * q; };
+  const auto mid = [&](double a, double b) {
+    const double w = 0.5 * (std::cbrt(a) + std::cbrt(b));
+    return b_at(w * w * w);
+  };
+  using Sh = CellShape;
+  const TemporalProfile profile = TemporalProfile::JerkLimited(
+      Grid{{0.0, kConstantJerkMiddle * b_at(e1), b_at(e1), mid(e1, e2), b_at(e2), mid(e2, e3), b_at(e3), mid(e3, e4),
+            b_at(e4), b_at(e4), b_at(e4)}},
+      Shapes{{Sh::kRestStart, Sh::kRampStart, Sh::kRampStart, Sh::kRampStart, Sh::kQuadratic}},
+      Grid{{0.0, e1, e2, e3, e4, 1.0}});
+  const double J = 2.0 * std::pow(q, 1.5) / 9.0;
+  const double t_ramp = std::cbrt(6.0 * S / J);
+  EXPECT_NEAR(profile.TimeAt(0, 4), t_ramp, 1e-13 * t_ramp);
+  // (Up to the last ramp cell's end: the quadratic cell after it, b constant, starts with sddot = 0.)
+  for (int j = 1; j < 200; ++j) {
+    const double t = t_ramp * j / 200.0;
+    const TemporalProfile::Point p = profile.AtTime(t);
+    // Each value a few ulps of its size, through the time inversion (Newton to a few ulps of t).
+    EXPECT_NEAR(p.s, J * t * t * t / 6.0, 1e-13 * S) << "t " << t;
+    EXPECT_NEAR(p.sdot, 0.5 * J * t * t, 1e-12 * J * t_ramp * t_ramp) << "t " << t;
+    EXPECT_NEAR(p.sddot, J * t, 1e-12 * J * t_ramp) << "t " << t;
+    EXPECT_NEAR(p.sdddot, J, 1e-12 * J) << "t " << t;
+  }
+  const TemporalProfile::Point end = profile.InCell(0, 3, e4 - e3);
+  EXPECT_NEAR(end.sddot, J * t_ramp, 1e-12 * J * t_ramp);
+  EXPECT_NEAR(end.sdddot, J, 1e-12 * J);
+}
+
 TEST(JerkProfile, AtTimeInvertsTimeAtS) {
-  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest(), Ramped()}) {
     const double T = profile.total_time();
     int checked = 0;
     for (int i = 0; i < profile.num_pieces(); ++i) {
@@ -228,7 +321,7 @@ TEST(JerkProfile, AtTimeInvertsTimeAtS) {
         EXPECT_NEAR(profile.TimeAtS(i, profile.CellStart(i, k)), profile.TimeAt(i, k), 4 * kEps * T);
       }
     }
-    EXPECT_GE(checked, 790);
+    EXPECT_GE(checked, profile.num_pieces() * 395);
   }
 }
 
@@ -242,7 +335,7 @@ std::pair<double, double> CentralDifference(G g, double t, double h) {
 }
 
 TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
-  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest(), Ramped()}) {
     const int K = profile.cells_per_piece();
     int checked = 0;
     for (int i = 0; i < profile.num_pieces(); ++i) {
@@ -275,7 +368,7 @@ TEST(JerkProfile, DerivativesMatchFiniteDifferencesInsideCells) {
         }
       }
     }
-    EXPECT_EQ(checked, 40);
+    EXPECT_EQ(checked, profile.num_pieces() * K * 5);
   }
 }
 
@@ -305,7 +398,7 @@ TEST(JerkProfile, InCellIsAtSInsideACellAndItsOwnStateAtItsEnds) {
 // InCellSamples forms a cell once for its samples: the same formulas as InCell at each sample, so
 // the same values bit for bit, on every shape of cell (rest, quadratic).
 TEST(JerkProfile, InCellSamplesAreInCellAtEachSample) {
-  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest()}) {
+  for (const TemporalProfile& profile : {Mixed(), SmoothRestToRest(), Ramped()}) {
     const int n = 7;
     std::vector<TemporalProfile::Point> samples(n + 1);
     for (int i = 0; i < profile.num_pieces(); ++i) {
@@ -471,6 +564,21 @@ TEST(JerkProfile, InvalidProfilesAreRejected) {
   ExpectRejected(Grid{{0.1, 0.3, 1, 1, 1}}, Shapes{{S::kRestStart, S::kQuadratic}}, "cell 0 of piece 0 starts at rest");
   ExpectRejected(Grid{{1, 1, 1, 0.5, 0.2}}, Shapes{{S::kQuadratic, S::kRestEnd}}, "cell 1 of piece 0 ends at rest");
   ExpectRejected(Grid{{1, 0.5, 0, 0, 0}}, Shapes{{S::kQuadratic, S::kRestEnd}}, "cell 1 of piece 0 ends at rest");
+  // Ramp cells: at the rest point itself, with b = 0 at a half point, or q below 0 between them.
+  const auto rejected_ramp = [](const Grid& b, const Shapes& shapes, const std::string& needle) {
+    try {
+      TemporalProfile::JerkLimited(b, shapes, Grid{{0.0, 0.5, 1.0}});
+      ADD_FAILURE() << "accepted; expected an error naming: " << needle;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  rejected_ramp(Grid{{1, 1, 1, 1, 1}}, Shapes{{S::kRampStart, S::kQuadratic}},
+                "cell 0 of piece 0 is a ramp cell at its piece's start");
+  rejected_ramp(Grid{{1, 1, 1, 1, 1}}, Shapes{{S::kQuadratic, S::kRampEnd}},
+                "cell 1 of piece 0 is a ramp cell at its piece's end");
+  rejected_ramp(Grid{{1, 1, 1, 0, 1}}, Shapes{{S::kQuadratic, S::kRampStart}}, "b > 0 at its three half points");
+  rejected_ramp(Grid{{1, 1, 1, 0.01, 1}}, Shapes{{S::kQuadratic, S::kRampStart}}, "q = b / w^4 drops below 0");
 }
 
 }  // namespace

@@ -26,6 +26,17 @@
 //   ds - sigma = ds w^3, b = w^4 q(w) with q(1) = b0, sddot = -w (4 alpha + 5 beta w) / (6 ds)
 //   (braking, 0 at the end), sdddot as above (positive where the braking eases off).
 //
+// - kRampStart: a cell of the ramp after a rest start (the cells after a rest cell on a curve), in
+//   the coordinate w = s^(1/3) of the piece (s from the piece's start, the rest point): b = w^4 q(w)
+//   with q quadratic in w through its values at the cell's ends and at its middle in w, w_m = (w0 +
+//   w1) / 2 (so the cell's middle half point is at s = w_m^3, not at its middle in s). Then dw/dt =
+//   sqrt(q) / 3, sdot = w^2 sqrt(q), sddot = w (4 q + w q') / 6, sdddot = sqrt(q) (4 q + 6 w q' +
+//   w^2 q'') / 18 (q' = dq/dw), and the cell takes 3 times the time of a quadratic cell of length
+//   w1 - w0 through the three values of q. A constant s-jerk from rest (q constant) is exact in it,
+//   as a regular cell's sddot linear in s is not: its s-jerk is proportional to sdot.
+// - kRampEnd: the mirror before a rest end, w = (1 - s)^(1/3) falling along the path: sddot = -w (4 q
+//   + w q') / 6, sdot and sdddot as above.
+//
 // Cell times are closed forms of the integral of 1 / sqrt(b) (see temporal_profile.cpp for the
 // forms free of cancellation); AtTime inverts them exactly (closed form for linear and rest cells,
 // safeguarded Newton for quadratic ones).
@@ -42,15 +53,18 @@ enum class CellShape {
   kQuadratic,  // b quadratic in s through the cell's three half-grid values; sddot linear in s
   kRestStart,  // leaves rest (b = 0 and sddot = 0 at the cell's start) with constant sdddot > 0
   kRestEnd,    // arrives at rest (b = 0 and sddot = 0 at the cell's end) with constant sdddot > 0
+  kRampStart,  // after a rest start: b = w^4 q(w), q quadratic in w = s^(1/3) (see above)
+  kRampEnd,    // before a rest end: the mirror, w = (1 - s)^(1/3)
 };
 
 // Every enumerator, in declaration order (for FromString, and for listing the choices).
-inline constexpr std::array<CellShape, 4> kCellShapes = {
-    CellShape::kLinear,
-    CellShape::kQuadratic,
-    CellShape::kRestStart,
-    CellShape::kRestEnd,
+inline constexpr std::array<CellShape, 6> kCellShapes = {
+    CellShape::kLinear,  CellShape::kQuadratic, CellShape::kRestStart,
+    CellShape::kRestEnd, CellShape::kRampStart, CellShape::kRampEnd,
 };
+// True for kRestStart and kRestEnd, and for kRampStart and kRampEnd.
+inline bool IsRestShape(CellShape shape) { return shape == CellShape::kRestStart || shape == CellShape::kRestEnd; }
+inline bool IsRampShape(CellShape shape) { return shape == CellShape::kRampStart || shape == CellShape::kRampEnd; }
 const char* ToString(CellShape shape);
 // The enumerator named `text` (as ToString writes it) into *shape; false when none is.
 bool FromString(const std::string& text, CellShape* shape);
@@ -65,14 +79,18 @@ class TemporalProfile {
 
   // A jerk-limited profile. half_b[i] holds the 2K + 1 values of piece i at s = j ds / 2 (cell k
   // spans half points 2k, 2k + 1, 2k + 2), shapes[i] the K shapes of its cells (kQuadratic,
-  // kRestStart or kRestEnd; K >= 1 and the same for all pieces). Values must be finite and >= 0.
+  // kRestStart, kRestEnd, kRampStart or kRampEnd; K >= 1 and the same for all pieces). A ramp cell
+  // needs b > 0 at its three half points and q >= 0 between them, and lies off the rest point (a
+  // kRampStart cell starts after s = 0, a kRampEnd cell ends before s = 1); its middle half point
+  // is at its middle in w (see above). Values must be finite and >= 0.
   // A quadratic cell must have b > 0 inside and a finite time (b reaching 0 at an end with zero
   // slope there, e.g. b0 = 0 and c1 = 0, takes forever; b = 0 at both ends with bm > 0 is finite
   // and allowed). A rest-start cell needs b = 0 at its start and b > 0 at its end, a rest-end cell
   // the reverse, and its middle value at least 2^(-5/3) times its far-end value (alpha >= 0 above;
   // 2^(-4/3) times it is a constant s-jerk). Throws std::invalid_argument naming piece and cell.
   // cell_edges (optional): the K + 1 edges of every piece's cells in s, increasing from 0 to 1, for
-  // a grid graded towards rest points; the half points are then the cells' middles. Empty: K equal
+  // a grid graded towards rest points; the half points are then the cells' middles (a ramp cell's:
+  // its middle in w, RampMiddleS). Empty: K equal
   // cells of ds = 1 / K.
   static TemporalProfile JerkLimited(std::vector<std::vector<double>> half_b,
                                      std::vector<std::vector<CellShape>> shapes,
@@ -142,6 +160,10 @@ class TemporalProfile {
   // (Negative for a middle value below 2^(-5/3) times the far one, which makes no profile.)
   static double RestAlpha(double b_mid, double b_far);
   static double RestMiddle(double alpha, double b_far);
+  // A ramp cell's coordinate w at s of its piece: s^(1/3) (kRampStart) or (1 - s)^(1/3) (kRampEnd).
+  static double RampW(CellShape shape, double s);
+  // Where a ramp cell [s0, s1] has its middle half point: at w = (w0 + w1) / 2.
+  static double RampMiddleS(CellShape shape, double s0, double s1);
 
  private:
   // Cell index and sigma = s - s_k for s in [0, 1] on a piece.
