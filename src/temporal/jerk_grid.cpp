@@ -61,14 +61,13 @@ constexpr double kBrakeGradingRoom = 1.0;
 // nominal cell) gets ramp cells (CellShape::kRampStart / kRampEnd): with the rest cell, n cells
 // uniform in w = s^(1/3) over kRampLengthFactor times the ramp from rest (RampLength, at most
 // kLargestRestCell), n = kRampCellsPerNominal S K rounded (S that length; at least kMinRampCells
-// and at most K / 3; the last ramp cell is then about 3 / kRampCellsPerNominal nominal cells
-// long), followed by cells growing by kRampGrading up to the nominal cell. In a ramp cell a
-// constant s-jerk from rest is exact and its s-jerk is free of sdot (a regular cell's is
-// proportional to sdot, so along a ramp it holds the jerk below its limit at each cell's start;
-// the geometric cells that made up for that took up to K / 3 cells per end). Against the
-// time-domain reference on the 12 rest-to-rest curves (time_domain_reference_test.cpp), at K =
-// 50 / 100 / 200 the worst curve went from +0.73 / +0.42 / +0.30% (geometric cells, kRestGrading)
-// to +0.48 / +0.25 / +0.13%, all 12 within 0.5% at K = 50 (9 before). The worst curve at K = 50
+// and at most K / 3, so none below K = 9; the last ramp cell is then about 3 /
+// kRampCellsPerNominal nominal cells long), followed by cells growing by kRampGrading up to the nominal cell. In a ramp
+// cell a constant s-jerk from rest is exact and its s-jerk is free of sdot (a regular cell's is proportional to sdot,
+// so along a ramp it holds the jerk below its limit at each cell's start; the geometric cells that made up for that
+// took up to K / 3 cells per end). Against the time-domain reference on the 12 rest-to-rest curves
+// (time_domain_reference_test.cpp), at K = 50 / 100 / 200 the worst curve went from +0.73 / +0.42 / +0.30% (geometric
+// cells, kRestGrading) to +0.48 / +0.25 / +0.13%, all 12 within 0.5% at K = 50 (9 before). The worst curve at K = 50
 // for other choices (length factor, cells per nominal cell): with grading 1.5, (1.5, 3) +0.54%,
 // (2, 3) +0.52%, (2, 4) +0.49%, (2.5, 4) +0.49%, (2.5, 5) +0.48%, (3, 4) +0.51%, (3, 5) +0.53%,
 // (3, 6) +0.53%; without it (2, 4) +0.48%, (2.5, 4) +0.53%.
@@ -256,7 +255,8 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
     std::vector<double> g;
     double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
-    if (ramp != nullptr && ramp_degree_fits && !rest.braking && (rest.halved || (rest.curved && h > ds))) {
+    if (ramp != nullptr && ramp_degree_fits && !rest.braking && K / 3 >= kMinRampCells &&
+        (rest.halved || (rest.curved && h > ds))) {
       // A curved start: a rest cell and ramp cells, uniform in w = s^(1/3) over kRampLengthFactor
       // ramps, then cells growing by kRampGrading up to the nominal cell.
       const double S = std::min(kRampLengthFactor * rest.ramp, kLargestRestCell);

@@ -96,5 +96,32 @@ TEST(TimeDomainReference, JerkLimitedCurvesFromRestAreCloseToIt) {
   EXPECT_LE(worst_fine, 0.0018);
 }
 
+// Ramp cells at every K: on the curve whose start is halved most (curve 8), from K = 3 (no room
+// for ramp cells below K = 9: the old rest cells there) to 40, every solve answers on the
+// structured path with every limit held on its exact trajectory (1e-6: the solvers' row
+// tolerance) and is never faster than the reference (its own error, kReferenceError). K = 3..8
+// have no ramp cells; from 9 on the grid has as many cells as K says, ramp cells included.
+TEST(TimeDomainReference, RampCellsAnswerAtEveryK) {
+  std::ifstream in(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/rest_to_rest_curves.json");
+  ASSERT_TRUE(in) << "tests/temporal/data/rest_to_rest_curves.json is missing";
+  const nlohmann::json curve = nlohmann::json::parse(in)[8];
+  const double reference = 2.605030;  // TimeDomainReference.JerkLimitedCurvesFromRestAreCloseToIt
+  int with_ramp = 0;
+  for (int K = 3; K <= 40; ++K) {
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(CurveProblem(curve, K));
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << "K " << K << ": " << r.message;
+    EXPECT_EQ(r.method, "structured") << "K " << K;
+    ASSERT_EQ(r.profile.cells_per_piece(), K);
+    EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6) << "K " << K;
+    EXPECT_LE(r.max_acceleration_ratio, 1.0 + 1e-6) << "K " << K;
+    EXPECT_GE(r.total_time, reference * (1.0 - kReferenceError)) << "K " << K;
+    bool ramp = false;
+    for (int k = 0; k < K; ++k) ramp = ramp || IsRampShape(r.profile.shape(0, k));
+    EXPECT_EQ(ramp, K >= 9) << "K " << K;
+    with_ramp += ramp ? 1 : 0;
+  }
+  EXPECT_EQ(with_ramp, 32);
+}
+
 }  // namespace
 }  // namespace timeopt
