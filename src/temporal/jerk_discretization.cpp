@@ -341,7 +341,10 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
   for (int i = 0; i < m; ++i) {
     const bool rest_start = d.shapes[static_cast<size_t>(i * K)] == CellShape::kRestStart;
     const bool rest_end = d.shapes[static_cast<size_t>(i * K + K - 1)] == CellShape::kRestEnd;
-    // Ramp cells need the rest cells' polynomials (RestCellPolys: degree up to 10).
+    // Ramp cells need the rest cells' polynomials (RestCellPolys: degree up to 10). Ipopt's exact
+    // rows keep the regular cells after a rest cell: on ramp cells its solves slowed from 0.4 s to
+    // 58 s (a quintic of the reference set at K = 100, 46 against 309 iterations, most of them
+    // restoring feasibility), and at K = 200 ran out of time.
     const int degree1 = static_cast<int>(c.derivatives[static_cast<size_t>(i)][0].cols()) - 1;
     int ramp[2] = {0, 0};
     d.cell_edges[static_cast<size_t>(i)] = CellEdges(K,
@@ -351,7 +354,8 @@ TemporalDiscretization DiscretizeJerkLimitedImpl(const TemporalProblem& problem,
                                                      rest_end     ? RestCellSize(problem, i, true, rest_start)
                                                      : i == m - 1 ? BrakeCellSize(problem, i, true, K)
                                                                   : RestSize(),
-                                                     &ramp, 6 * std::max(degree1, 0) + 6 <= internal::kMaxSmallPoly);
+                                                     jerk_rows == JerkRows::kExact ? nullptr : &ramp,
+                                                     6 * std::max(degree1, 0) + 6 <= internal::kMaxSmallPoly);
     for (int k = 1; k <= ramp[0]; ++k) d.shapes[static_cast<size_t>(i * K + k)] = CellShape::kRampStart;
     for (int k = K - 1 - ramp[1]; k < K - 1; ++k) d.shapes[static_cast<size_t>(i * K + k)] = CellShape::kRampEnd;
     for (int k = 0; k < K; ++k) {

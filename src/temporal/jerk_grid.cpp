@@ -255,13 +255,24 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
     std::vector<double> g;
     double h = rest.cell;
     if (!(h > 0.0) || K < 4) return g;
+    const double ramp_region = std::min(kRampLengthFactor * rest.ramp, kLargestRestCell);
     if (ramp != nullptr && ramp_degree_fits && !rest.braking && K / 3 >= kMinRampCells &&
-        (rest.halved || (rest.curved && h > ds))) {
+        kSmallestRestCell * ds < 0.5 * ramp_region && (rest.halved || (rest.curved && h > ds))) {
       // A curved start: a rest cell and ramp cells, uniform in w = s^(1/3) over kRampLengthFactor
       // ramps, then cells growing by kRampGrading up to the nominal cell.
-      const double S = std::min(kRampLengthFactor * rest.ramp, kLargestRestCell);
+      const double S = ramp_region;
       const int n = std::clamp(static_cast<int>(std::lround(kRampCellsPerNominal * S * K)), kMinRampCells, K / 3);
-      for (int j = 0; j < n; ++j) g.push_back(S * ((j + 1.0) * (j + 1.0) * (j + 1.0) - j * j * j) / (n * n * n));
+      // The rest cell at least kSmallestRestCell of the nominal cell (uniform in w it would be S /
+      // n^3, 3e-6 of the piece at K = 100), the ramp cells uniform in w from its end to S.
+      const double first = std::max(S / (n * n * n), kSmallestRestCell * ds);
+      const double w1 = std::cbrt(first / S);
+      double previous = 0.0;
+      for (int j = 0; j < n; ++j) {
+        const double w = j == 0 ? w1 : w1 + (1.0 - w1) * j / (n - 1.0);
+        const double edge = j + 1 == n ? S : S * w * w * w;
+        g.push_back(edge - previous);
+        previous = edge;
+      }
       *ramp = n - 1;
       for (double next = S * (kRampGrading - 1.0); next < ds && static_cast<int>(g.size()) < K / 3;
            next *= kRampGrading) {
