@@ -61,19 +61,26 @@ constexpr double kBrakeGradingRoom = 1.0;
 // nominal cell) gets ramp cells (CellShape::kRampStart / kRampEnd): with the rest cell, n cells
 // uniform in w = s^(1/3) over kRampLengthFactor times the ramp from rest (RampLength, at most
 // kLargestRestCell), n = kRampCellsPerNominal S K rounded (S that length; at least kMinRampCells
-// and at most K / 3, so none below K = 9; the last ramp cell is then about 3 /
-// kRampCellsPerNominal nominal cells long), followed by cells growing by kRampGrading up to the nominal cell. In a ramp
-// cell a constant s-jerk from rest is exact and its s-jerk is free of sdot (a regular cell's is proportional to sdot,
-// so along a ramp it holds the jerk below its limit at each cell's start; the geometric cells that made up for that
-// took up to K / 3 cells per end). Against the time-domain reference on the 12 rest-to-rest curves
-// (time_domain_reference_test.cpp), at K = 50 / 100 / 200 the worst curve went from +0.73 / +0.42 / +0.30% (geometric
-// cells, kRestGrading) to +0.48 / +0.25 / +0.13%, all 12 within 0.5% at K = 50 (9 before). The worst curve at K = 50
-// for other choices (length factor, cells per nominal cell): with grading 1.5, (1.5, 3) +0.54%,
-// (2, 3) +0.52%, (2, 4) +0.49%, (2.5, 4) +0.49%, (2.5, 5) +0.48%, (3, 4) +0.51%, (3, 5) +0.53%,
-// (3, 6) +0.53%; without it (2, 4) +0.48%, (2.5, 4) +0.53%.
+// and at most K / 3, so none below K = 9; the last ramp cell is then about 3 / kRampCellsPerNominal
+// nominal cells long), followed by cells growing by kRampGrading up to the nominal cell. In a ramp
+// cell a constant s-jerk from rest is exact and its s-jerk is not tied to sdot (a regular cell's is
+// proportional to sdot, so along a ramp it holds the jerk below its limit at each cell's start; the
+// geometric cells that made up for that took up to K / 3 cells per end). Against the time-domain
+// reference on the 12 rest-to-rest curves (time_domain_reference_test.cpp), at K = 50 / 100 / 200
+// the worst curve went from +0.73 / +0.42 / +0.30% (geometric cells, kRestGrading) to +0.48 / +0.24
+// / +0.13%, all 12 within 0.5% at K = 50 (9 before). The worst curve at K = 50 for other choices
+// (length factor, cells per nominal cell): with grading 1.5, (1.5, 3) +0.54%, (2, 3) +0.52%, (2, 4)
+// +0.49%, (2.5, 4) +0.49%, (2.5, 5) +0.48%, (3, 4) +0.51%, (3, 5) +0.53%, (3, 6) +0.53%; without it
+// (2, 4) +0.48%, (2.5, 4) +0.53%.
 constexpr double kRampLengthFactor = 2.0;
 constexpr double kRampCellsPerNominal = 5.0;
 constexpr int kMinRampCells = 3;
+// Ramp cells only where they number at most kMaxRampCells (a ramp region of at most 20 nominal
+// cells; beyond, the geometric cells above). On the reference curve whose start is halved most, K =
+// 1000 has 229 of them and K = 2000 458: there the structured path did not answer (the general path
+// did, in 5 s and 217 MB against 0.08 s and 41 MB with geometric cells); with at most 100 of
+// them and the region cut to fit, or fewer and longer cells, K = 2000-5000 failed too.
+constexpr int kMaxRampCells = 100;
 constexpr double kRampGrading = 1.5;
 // The smallest rest cell, relative to the nominal cell 1 / K, and the largest, in s.
 constexpr double kSmallestRestCell = 1.0 / 64.0;
@@ -257,11 +264,13 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
     if (!(h > 0.0) || K < 4) return g;
     const double ramp_region = std::min(kRampLengthFactor * rest.ramp, kLargestRestCell);
     if (ramp != nullptr && ramp_degree_fits && !rest.braking && K / 3 >= kMinRampCells &&
-        kSmallestRestCell * ds < 0.5 * ramp_region && (rest.halved || (rest.curved && h > ds))) {
+        kSmallestRestCell * ds < 0.5 * ramp_region && kRampCellsPerNominal * ramp_region * K <= kMaxRampCells &&
+        (rest.halved || (rest.curved && h > ds))) {
       // A curved start: a rest cell and ramp cells, uniform in w = s^(1/3) over kRampLengthFactor
       // ramps, then cells growing by kRampGrading up to the nominal cell.
       const double S = ramp_region;
-      const int n = std::clamp(static_cast<int>(std::lround(kRampCellsPerNominal * S * K)), kMinRampCells, K / 3);
+      const int n = std::clamp(static_cast<int>(std::lround(kRampCellsPerNominal * S * K)), kMinRampCells,
+                               std::min(K / 3, kMaxRampCells));
       // The rest cell at least kSmallestRestCell of the nominal cell (uniform in w it would be S /
       // n^3, 3e-6 of the piece at K = 100), the ramp cells uniform in w from its end to S.
       const double first = std::max(S / (n * n * n), kSmallestRestCell * ds);

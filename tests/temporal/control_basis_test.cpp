@@ -236,9 +236,11 @@ TEST(ControlBasis, SpansTheSameProfilesAsTheGrid) {
       // y_c = P1 (or the boundary b) over the scale of the grid value it lives at; a ramp cell's P1
       // is q's, q = rho b (RampFrame), over rho_m times that scale.
       const int piece = g / (d.cells_per_piece + 1), k = (g - d.GridIndex(piece, 0)) / 2;
-      const CellShape shape = d.shapes[static_cast<size_t>(piece * (d.cells_per_piece / 2) + k)];
       double rho = 1.0;
-      if (!basis.at_knot[cs] && IsRampShape(shape)) {
+      // (A control at a knot may be a piece's last grid value, k = K: no cell of its own.)
+      const CellShape shape = basis.at_knot[cs] ? CellShape::kQuadratic
+                                                : d.shapes[static_cast<size_t>(piece * (d.cells_per_piece / 2) + k)];
+      if (IsRampShape(shape)) {
         const std::vector<double>& e = d.cell_edges[static_cast<size_t>(piece)];
         const double w = 0.5 * (TemporalProfile::RampW(shape, e[static_cast<size_t>(k)]) +
                                 TemporalProfile::RampW(shape, e[static_cast<size_t>(k) + 1]));

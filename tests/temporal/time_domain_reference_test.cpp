@@ -85,7 +85,7 @@ TEST(TimeDomainReference, JerkLimitedCurvesFromRestAreCloseToIt) {
     if (gap[0] <= 5e-3) ++within_half_percent;
   }
   // Measured (2026-12-05, ramp cells after rest cells on curves): all 12 within 0.5% at K = 50
-  // (+0.115 to +0.476%), the worst at K = 100 +0.246%, at K = 200 +0.128%. With geometric cells
+  // (+0.114 to +0.477%), the worst at K = 100 +0.238%, at K = 200 +0.127%. With geometric cells
   // after the rest cells instead (2026-12-03): 9 of 12, the worst +0.73 / +0.42 / +0.30%; before
   // rest cells were cut to a nominal cell on curves: 8 of 12, the worst +1.27 / +1.04 / +0.92%.
   // The bounds are the targets (0.5% at K = 50) with the reference's own error (8e-6) inside them,
@@ -100,7 +100,8 @@ TEST(TimeDomainReference, JerkLimitedCurvesFromRestAreCloseToIt) {
 // for ramp cells below K = 9: the old rest cells there) to 40, every solve answers on the
 // structured path with every limit held on its exact trajectory (1e-6: the solvers' row
 // tolerance) and is never faster than the reference (its own error, kReferenceError). K = 3..8
-// have no ramp cells; from 9 on the grid has as many cells as K says, ramp cells included.
+// have no ramp cells; from 9 on the grid has as many cells as K says, ramp cells included. Then
+// K = 200, 1000 and 2000.
 TEST(TimeDomainReference, RampCellsAnswerAtEveryK) {
   std::ifstream in(std::string(TIMEOPT_SOURCE_DIR) + "/tests/temporal/data/rest_to_rest_curves.json");
   ASSERT_TRUE(in) << "tests/temporal/data/rest_to_rest_curves.json is missing";
@@ -121,6 +122,22 @@ TEST(TimeDomainReference, RampCellsAnswerAtEveryK) {
     with_ramp += ramp ? 1 : 0;
   }
   EXPECT_EQ(with_ramp, 32);
+  // Fine grids: ramp cells while they number at most 100 per end (at the start: K = 200 here), the
+  // geometric cells beyond (K = 1000, 2000). With 458 ramp cells at K = 2000 the structured path had not answered.
+  for (const int K : {200, 1000, 2000}) {
+    const TemporalResult r = MakeSocpTemporalSolver()->Solve(CurveProblem(curve, K));
+    ASSERT_EQ(r.status, TemporalStatus::kOptimal) << "K " << K << ": " << r.message;
+    EXPECT_EQ(r.method, "structured") << "K " << K;
+    EXPECT_LE(r.max_jerk_ratio, 1.0 + 1e-6) << "K " << K;
+    EXPECT_GE(r.total_time, reference * (1.0 - kReferenceError)) << "K " << K;
+    // The start's ramp region spans 2.3 / 46 / 92 nominal cells at K = 200 / 1000 / 2000 (the end's
+    // 0.4 / 8 / 16).
+    const bool head = IsRampShape(r.profile.shape(0, 1));
+    EXPECT_EQ(head, K == 200) << "K " << K;
+    int ramp = 0;
+    for (int k = 0; k < K; ++k) ramp += IsRampShape(r.profile.shape(0, k)) ? 1 : 0;
+    EXPECT_LE(ramp, 2 * 100) << "K " << K;
+  }
 }
 
 }  // namespace
