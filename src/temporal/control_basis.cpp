@@ -17,6 +17,9 @@
 //   at a boundary where the tangent vanishes, b is fixed by the acceleration (acc = f'' b), or is a
 //   control of its own where the curvature vanishes too (nothing bounds it but its cell's rows),
 //   and P1 is free.
+// A ramp cell (b = w^4 q(w), q quadratic in w; temporal_profile.h) has q's middle Bernstein
+// coefficient in w as its control, and a knot next to one follows from sddot continuity written
+// for each side as lambda b + (a form of that cell's control), whatever the two shapes are.
 // A run of tied pieces (TemporalDiscretization::tied): b = b0 + 2 sddot s on each, with b0 and
 // sddot carried across each joint by its continuity row from the knot before the run, which is a
 // control (read back as the grid value), and the P1 before it; the first P1 after the run follows.
