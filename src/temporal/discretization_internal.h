@@ -89,6 +89,15 @@ inline RampFrame RampFrameOf(CellShape shape, double s0, double s1) {
   f.eps = shape == CellShape::kRampStart ? 1.0 : -1.0;
   return f;
 }
+// The linearization point of a cell's jerk rows: the largest b of the quadratic through the
+// previous solution's three half-grid values lb, at least floor.
+double LinearizationPoint(const double (&lb)[3], double floor);
+// A ramp cell's: the largest q = rho_j b_j on the cell from b at its three half-grid values (q >= b
+// there, so the piece's floor of b bounds q as well).
+inline double RampLinearizationPoint(const RampFrame& f, const double (&lb)[3], double floor) {
+  const double lq[3] = {f.rho[0] * lb[0], f.rho[1] * lb[1], f.rho[2] * lb[2]};
+  return LinearizationPoint(lq, floor);
+}
 // The shape and frame of full cell k of piece i of a jerk-limited discretization.
 inline CellShape JerkCellShape(const TemporalDiscretization& d, int piece, int k) {
   return d.shapes[static_cast<size_t>(piece * (d.cells_per_piece / 2) + k)];
@@ -387,9 +396,6 @@ void RestAlphaToMiddles(const TemporalDiscretization& d, std::vector<double>* b)
 void RestMiddlesToAlpha(const TemporalDiscretization& d, std::vector<double>* b);
 // alpha of a constant s-jerk (b at the far end) in every rest cell's middle value.
 void RestAlphaOfConstantJerk(const TemporalDiscretization& d, std::vector<double>* b);
-// The linearization point of a cell's jerk rows: the largest b of the quadratic through the
-// previous solution's three half-grid values lb, at least floor.
-double LinearizationPoint(const double (&lb)[3], double floor);
 // The floors of LinearizationPoint for a linearization (b at every half-grid value of the jerk
 // discretization d), one per piece: kLinearizationFloor times the piece's largest b. Per piece,
 // not over the curve: b scales as 1 / |f'|^2, and a floor taken over the curve had linearized the

@@ -269,7 +269,6 @@ bool RampCellPolys(JerkContext& c, int piece, int k, RestPolys* out) {
   if (6 * std::max(degree1, 0) + 6 > internal::kMaxSmallPoly) return false;
   const RampFrame f = RampFrameOf(c.d, piece, k);
   out->ramp = true;
-  for (int j = 0; j < 3; ++j) out->rho[j] = f.rho[j];
   const SmallPoly w = (SmallPoly(2) << f.w[0], f.dw).finished();
   const SmallPoly w2 = Multiply(w, w), w3 = Multiply(w2, w), w4 = Multiply(w2, w2), w6 = Multiply(w3, w3);
   const SmallPoly s_of_u = f.eps > 0.0 ? w3 : SmallPoly(Sum(Constant(1.0), -w3));
@@ -587,9 +586,7 @@ void AddLinearizedJerkRows(JerkContext& c, int piece, int k, int axis, int g0, c
     const double u0 = static_cast<double>(part) / parts, u1 = (part + 1.0) / parts;
     double b = std::max(previous_b(u0), previous_b(u1));
     if (rest != nullptr && rest->ramp) {
-      // The largest q = rho_j b_j on the cell (q >= b: the floor of b bounds q as well).
-      const double lq[3] = {rest->rho[0] * lb[0], rest->rho[1] * lb[1], rest->rho[2] * lb[2]};
-      b = internal::LinearizationPoint(lq, c.bbar_floors[static_cast<size_t>(piece)]);
+      b = internal::RampLinearizationPoint(RampFrameOf(c.d, piece, k), lb, c.bbar_floors[static_cast<size_t>(piece)]);
     } else if (rest != nullptr) {
       // A rest cell's q is linear: its largest value on the part is at an end of it.
       const double alpha = lb[kRestAlpha], far = lb[RestFar(c.d.shapes[static_cast<size_t>(piece * c.K + k)])];
@@ -644,9 +641,10 @@ void AddCellRows(JerkContext& c, int piece, int k, JerkRows mode, const std::vec
     c.row.Add(g0 + 2, 0.5);
   } else if (rest->ramp) {
     // q >= 0 on the cell: its middle Bernstein coefficient, over rho_m.
+    const RampFrame f = RampFrameOf(c.d, piece, k);
     c.row.Add(g0 + 1, -2.0);
-    c.row.Add(g0, 0.5 * rest->rho[0] / rest->rho[1]);
-    c.row.Add(g0 + 2, 0.5 * rest->rho[2] / rest->rho[1]);
+    c.row.Add(g0, 0.5 * f.rho[0] / f.rho[1]);
+    c.row.Add(g0 + 2, 0.5 * f.rho[2] / f.rho[1]);
   } else {
     c.row.Add(g0 + kRestAlpha, -1.0);  // q >= 0 on the cell: alpha >= 0 (b_far is)
   }

@@ -154,11 +154,9 @@ inline bool RestPoint(const JerkContext& c, int piece, bool end) {
 // b_j (RampFrame), so its polynomials are a rest cell's with q's Lagrange basis times rho_j, and
 //   sddot = eps w (4 q + w q_w) / 6,  P = f' (4 q + 6 w q_w + w^2 q_ww) / 18 + eps f'' w^3 (4 q + w
 //   q_w) / 2 + f''' w^6 q,
-// q_w = dq/dw; ramp is set and rho holds the frame's factors (the jerk rows are linearized at the
-// largest q on the whole cell).
+// q_w = dq/dw; ramp is set (the jerk rows are linearized at the largest q on the whole cell).
 struct RestPolys {
   bool ramp = false;
-  double rho[3] = {1.0, 1.0, 1.0};
   SmallPoly q[3];        // q per half-grid value of the cell (0 at the rest point's)
   SmallPoly vel[3][3];   // f'^2 w^4 q: v^2, [axis][value]
   SmallPoly acc[3][3];   // [axis][value]

@@ -269,8 +269,7 @@ std::vector<double> CellEdges(int K, const RestSize& rest_start, const RestSize&
       // A curved start: a rest cell and ramp cells, uniform in w = s^(1/3) over kRampLengthFactor
       // ramps, then cells growing by kRampGrading up to the nominal cell.
       const double S = ramp_region;
-      const int n = std::clamp(static_cast<int>(std::lround(kRampCellsPerNominal * S * K)), kMinRampCells,
-                               std::min(K / 3, kMaxRampCells));
+      const int n = std::clamp(static_cast<int>(std::lround(kRampCellsPerNominal * S * K)), kMinRampCells, K / 3);
       // The rest cell at least kSmallestRestCell of the nominal cell (uniform in w it would be S /
       // n^3, 3e-6 of the piece at K = 100), the ramp cells uniform in w from its end to S.
       const double first = std::max(S / (n * n * n), kSmallestRestCell * ds);

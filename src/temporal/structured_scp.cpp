@@ -72,9 +72,8 @@ class JerkCoefficients {
       if (t.rest_far == internal::kRampTemplate) {
         // A ramp cell's rows are in q = rho_j b_j: the largest q on the cell.
         const int piece = internal::PieceOf(d_, t.g0);
-        const internal::RampFrame f = internal::RampFrameOf(d_, piece, (t.g0 - d_.GridIndex(piece, 0)) / 2);
-        const double lq[3] = {f.rho[0] * lb[0], f.rho[1] * lb[1], f.rho[2] * lb[2]};
-        bbar = internal::LinearizationPoint(lq, floor);
+        bbar = internal::RampLinearizationPoint(internal::RampFrameOf(d_, piece, (t.g0 - d_.GridIndex(piece, 0)) / 2),
+                                                lb, floor);
       } else if (t.rest_far < 0) {
         bbar = internal::LinearizationPoint(lb, floor);
       } else {

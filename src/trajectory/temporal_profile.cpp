@@ -235,9 +235,7 @@ struct RampCell {
   }
   // sigma (from the cell's start, in s) at omega.
   double Sigma(double omega) const {
-    const double w = w0 + eps * omega;
-    const double s = shape == CellShape::kRampStart ? w * w * w : 1.0 - w * w * w;
-    return std::clamp(s - s0, 0.0, len);
+    return std::clamp(TemporalProfile::RampS(shape, w0 + eps * omega) - s0, 0.0, len);
   }
   double Time(double sigma) const { return 3.0 * q.Time(Omega(sigma)); }
   double Duration() const { return 3.0 * q.Time(q.h); }
@@ -331,9 +329,13 @@ double TemporalProfile::RampW(CellShape shape, double s) {
   return std::cbrt(std::max(0.0, shape == CellShape::kRampEnd ? 1.0 - s : s));
 }
 
+double TemporalProfile::RampS(CellShape shape, double w) {
+  const double cube = w * w * w;
+  return shape == CellShape::kRampEnd ? 1.0 - cube : cube;
+}
+
 double TemporalProfile::RampMiddleS(CellShape shape, double s0, double s1) {
-  const double w = 0.5 * (RampW(shape, s0) + RampW(shape, s1));
-  return shape == CellShape::kRampEnd ? 1.0 - w * w * w : w * w * w;
+  return RampS(shape, 0.5 * (RampW(shape, s0) + RampW(shape, s1)));
 }
 
 TemporalProfile TemporalProfile::JerkLimited(std::vector<std::vector<double>> half_b,

@@ -162,6 +162,8 @@ class TemporalProfile {
   static double RestMiddle(double alpha, double b_far);
   // A ramp cell's coordinate w at s of its piece: s^(1/3) (kRampStart) or (1 - s)^(1/3) (kRampEnd).
   static double RampW(CellShape shape, double s);
+  // Its inverse: s at w, w^3 (kRampStart) or 1 - w^3 (kRampEnd).
+  static double RampS(CellShape shape, double w);
   // Where a ramp cell [s0, s1] has its middle half point: at w = (w0 + w1) / 2.
   static double RampMiddleS(CellShape shape, double s0, double s1);
 
